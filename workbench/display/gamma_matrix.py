@@ -1,0 +1,172 @@
+"""The paper's display model: per-channel gamma, then a 3×3 matrix (Eq. 1–2).
+
+``L_c = d_c ** γ_c`` with ``d = DAC / 255``, then ``XYZ = M · [L_r, L_g, L_b]``;
+the columns of ``M`` are the measured XYZ of the full-drive primaries and
+``γ_c`` is fitted to that channel's sweep luminance normalized by its maximum.
+There is no black term: this is the *baseline* every diagnosis reports against.
+
+References
+----------
+Díaz-Barrancas, F., Cwierz, H., Pardo, P. J., Pérez, Á. L., & Suero, M. I.
+(2020). Spectral Color Management in Virtual Reality Scenes. Sensors, 20(19),
+5658, §2.1, Eq. (1)–(2), Table 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from workbench.display.base import DisplayModel, as_dac
+from workbench.errors import InputError
+from workbench.session import Session
+
+__all__ = ["GammaMatrixDisplay", "fit_gamma_matrix", "fit_power_law", "RAMP_KINDS"]
+
+RAMP_KINDS = ("ramp-r", "ramp-g", "ramp-b")
+
+
+def fit_power_law(drive: np.ndarray, response: np.ndarray) -> tuple[float, float]:
+    """Least-squares ``γ`` of ``response = drive ** γ`` and the fit's R².
+
+    ``drive`` on (0, 1], ``response`` normalized so that full drive is 1.
+    """
+    drive = np.asarray(drive, dtype=float)
+    response = np.asarray(response, dtype=float)
+    keep = drive > 0
+    if keep.sum() < 2:
+        raise InputError("a power-law fit needs at least two sweep levels above DAC 0")
+    drive, response = drive[keep], response[keep]
+    result = least_squares(lambda g: drive ** g[0] - response, x0=[2.2], bounds=([0.1], [10.0]))
+    gamma = float(result.x[0])
+    residual = drive ** gamma - response
+    total = np.sum((response - response.mean()) ** 2)
+    r_squared = float(1 - np.sum(residual ** 2) / total) if total > 0 else 1.0
+    return gamma, r_squared
+
+
+def _channel_sweep(session: Session, channel: int) -> tuple[np.ndarray, np.ndarray]:
+    """DAC levels and XYZ of one channel's sweep (other channels at 0)."""
+    others = [c for c in range(3) if c != channel]
+    rows = (session.mask(RAMP_KINDS[channel]) & np.all(session.rgb[:, others] == 0, axis=1)
+            & (session.rgb[:, channel] > 0))
+    return session.rgb[rows, channel], session.XYZ[rows]
+
+
+@dataclass(frozen=True, eq=False)
+class GammaMatrixDisplay(DisplayModel):
+    """Per-channel power law + 3×3 matrix (the paper's model).
+
+    Attributes
+    ----------
+    gamma : ndarray (3,)
+    matrix : ndarray (3, 3)
+        Columns: XYZ of the red, green and blue primaries at full drive.
+    white : ndarray (3,)
+        Measured white XYZ (``Y_white`` of relative colorimetry).
+    black : ndarray (3,)
+        Measured black XYZ, kept for reference; the model does not use it.
+    r_squared : ndarray (3,)
+        R² of each channel's gamma fit (NaN where not fitted from data).
+    """
+
+    gamma: np.ndarray
+    matrix: np.ndarray
+    white: np.ndarray
+    black: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    r_squared: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+
+    model_id = "gamma-matrix"
+
+    def __post_init__(self):
+        for name, shape in (("gamma", (3,)), ("matrix", (3, 3)), ("white", (3,)),
+                            ("black", (3,)), ("r_squared", (3,))):
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.shape != shape:
+                raise InputError(f"gamma-matrix display: {name} must have shape {shape}, "
+                                 f"got {value.shape}")
+            object.__setattr__(self, name, value)
+        if np.any(self.gamma <= 0) or not np.all(np.isfinite(self.gamma)):
+            raise InputError(f"gamma-matrix display: gammas must be positive; got {self.gamma}")
+        if abs(np.linalg.det(self.matrix)) < 1e-12 * max(1.0, np.abs(self.matrix).max()) ** 3:
+            raise InputError("gamma-matrix display: the primaries matrix is singular "
+                             "(two primaries have the same chromaticity?)")
+        object.__setattr__(self, "_inverse_matrix", np.linalg.inv(self.matrix))
+
+    @property
+    def white_XYZ(self) -> np.ndarray:
+        return self.white
+
+    @property
+    def black_XYZ(self) -> np.ndarray:
+        return self.black
+
+    def forward(self, rgb) -> np.ndarray:
+        drive = (as_dac(rgb) / 255.0) ** self.gamma
+        return drive @ self.matrix.T
+
+    def linear_drive(self, XYZ) -> np.ndarray:
+        return np.asarray(XYZ, dtype=float) @ self._inverse_matrix.T
+
+    def dac_from_drive(self, drive) -> np.ndarray:
+        return 255.0 * np.asarray(drive, dtype=float) ** (1.0 / self.gamma)
+
+    def parameters(self) -> dict:
+        return {
+            "gamma": self.gamma.tolist(),
+            "matrix": self.matrix.tolist(),
+            "white_XYZ": self.white.tolist(),
+            "black_XYZ": self.black.tolist(),
+            "r_squared": [None if np.isnan(v) else float(v) for v in self.r_squared],
+        }
+
+    @classmethod
+    def from_parameters(cls, parameters: dict) -> "GammaMatrixDisplay":
+        return cls(
+            gamma=parameters["gamma"],
+            matrix=parameters["matrix"],
+            white=parameters["white_XYZ"],
+            black=parameters.get("black_XYZ", [0.0, 0.0, 0.0]),
+            r_squared=[np.nan if v is None else v
+                       for v in parameters.get("r_squared", [None] * 3)],
+        )
+
+    @classmethod
+    def from_primaries_xyY(cls, primaries_xyY, white_xyY, gamma, black_xyY=None
+                           ) -> "GammaMatrixDisplay":
+        """Build the model from published chromaticities and luminances (e.g. Table 1)."""
+        def xyY_to_XYZ(xyY):
+            x, y, Y = np.asarray(xyY, dtype=float)
+            return np.array([x / y * Y, Y, (1 - x - y) / y * Y])
+
+        matrix = np.column_stack([xyY_to_XYZ(p) for p in primaries_xyY])
+        black = np.zeros(3) if black_xyY is None else xyY_to_XYZ(black_xyY)
+        return cls(gamma=gamma, matrix=matrix, white=xyY_to_XYZ(white_xyY), black=black)
+
+    @classmethod
+    def fit(cls, session: Session) -> "GammaMatrixDisplay":
+        """Fit from a session's black, white and per-channel sweeps (never its validation rows)."""
+        gammas, r_squared, columns = [], [], []
+        for channel, kind in enumerate(RAMP_KINDS):
+            levels, XYZ = _channel_sweep(session, channel)
+            if len(levels) == 0:
+                raise InputError(f"session {session.source!r} has no {kind} sweep; the paper's model "
+                                 "needs a sweep of each channel (measure plan 'paper' or 'quick')")
+            full = levels >= levels.max()
+            if levels.max() < 255:
+                raise InputError(f"session {session.source!r}: the {kind} sweep stops at DAC "
+                                 f"{levels.max():g}; the model needs the full-drive (255) primary")
+            columns.append(XYZ[full].mean(axis=0))
+            gamma, r2 = fit_power_law(levels / 255.0, XYZ[:, 1] / columns[-1][1])
+            gammas.append(gamma)
+            r_squared.append(r2)
+        return cls(gamma=gammas, matrix=np.column_stack(columns), white=session.white_XYZ,
+                   black=session.black_XYZ, r_squared=r_squared)
+
+    def describe(self) -> str:
+        return "gamma-matrix (γ = " + ", ".join(f"{g:.2f}" for g in self.gamma) + ")"
+
+
+fit_gamma_matrix = GammaMatrixDisplay.fit
