@@ -145,6 +145,8 @@ def as_reflectances(reflectances, wavelengths=None, what: str = "reflectances") 
         values = reflectances.copy().align(WORKING_SHAPE).values[None, :]
     else:
         values = np.asarray(reflectances, dtype=float)
+        if values.size == 0:
+            raise InputError(f"{what} is empty; give at least one reflectance spectrum")
         if values.ndim == 1:
             values = values[None, :]
         if wavelengths is not None and not np.array_equal(np.asarray(wavelengths, float),

@@ -43,6 +43,7 @@ __all__ = [
     "Table3Row",
     "Table4Row",
     "LibraryRow",
+    "Level1Predictor",
     "Reproduction",
     "table2",
     "table3",
@@ -142,8 +143,8 @@ class Reproduction:
     library: tuple[LibraryRow, ...]
     rf_spearman_rho: float
     rf_spearman_p: float
-    rf_spearman_rho_daylight: float
-    rf_threshold_for_1dE: float | None
+    predictor_rf: "Level1Predictor"
+    predictor_rf_cct: "Level1Predictor"
 
     def to_json(self) -> dict:
         return {
@@ -161,11 +162,13 @@ class Reproduction:
             "rf_predicts_level1": {
                 "spearman_rho": self.rf_spearman_rho,
                 "p_value": self.rf_spearman_p,
-                "spearman_rho_cct_5000_7500": self.rf_spearman_rho_daylight,
-                "rf_above_which_mean_dE00_below_1": self.rf_threshold_for_1dE,
-                "note": "mean CIEDE2000 of level 1 on the 99 CIE 2017 samples vs CIE Rf, "
-                        "across every source of the library; the threshold is taken over "
-                        "sources with CCT 5000-7500 K (near the D65 authoring white)",
+                "r_squared_rf_only": self.predictor_rf.r_squared,
+                "r_squared_rf_and_cct": self.predictor_rf_cct.r_squared,
+                "fit_rf_and_cct": dict(zip(self.predictor_rf_cct.descriptors,
+                                           self.predictor_rf_cct.coefficients)),
+                "note": "level 1's mean CIEDE2000 on the 99 CIE 2017 samples vs CIE Rf across "
+                        "every source of the library; adding the CCT distance from the D65 "
+                        "authoring white shows how much Rf alone misses",
             },
         }
 
@@ -236,37 +239,42 @@ def library_level1(k: float = DEFAULT_K, progress=None) -> tuple[LibraryRow, ...
     return tuple(rows)
 
 
-DAYLIGHT_CCT_RANGE = (5000.0, 7500.0)
-"""Sources whose CCT lies here are 'near the texture's authoring white' (D65) for the Rf study."""
+AUTHORING_CCT_K = 6504.0
+"""CCT of the white the level-1 textures are authored for (D65)."""
 
 
-def _near_daylight(rows):
-    low, high = DAYLIGHT_CCT_RANGE
-    return tuple(r for r in rows if low <= r.CCT <= high)
+@dataclass(frozen=True)
+class Level1Predictor:
+    """How well source descriptors predict level 1's mean CIEDE2000 (least squares, R²)."""
+
+    descriptors: tuple[str, ...]
+    coefficients: tuple[float, ...]
+    r_squared: float
 
 
-def _rf_threshold(rows: tuple[LibraryRow, ...], limit: float = 1.0) -> float | None:
-    """Lowest Rf above which every near-daylight source keeps level 1's CES mean ΔE00 < ``limit``.
+def _mired_distance(CCT: np.ndarray) -> np.ndarray:
+    return np.abs(1e6 / CCT - 1e6 / AUTHORING_CCT_K)
 
-    Sources far from the D65 authoring white are left out: for them level 1
-    fails whatever the Rf (CIE A has Rf 100), see :func:`reproduce`.
-    """
-    ordered = sorted(_near_daylight(rows), key=lambda r: r.Rf, reverse=True)
-    threshold = None
-    for row in ordered:
-        if row.ces99_mean_dE00 >= limit:
-            break
-        threshold = row.Rf
-    return threshold
+
+def _predictor(rows, use_mired: bool) -> Level1Predictor:
+    y = np.array([r.ces99_mean_dE00 for r in rows])
+    columns = [np.ones(len(rows)), 100.0 - np.array([r.Rf for r in rows])]
+    names = ["intercept", "100 - Rf"]
+    if use_mired:
+        columns.append(_mired_distance(np.array([r.CCT for r in rows])))
+        names.append("|mired(CCT) - mired(6504 K)|")
+    X = np.column_stack(columns)
+    coefficients, *_ = np.linalg.lstsq(X, y, rcond=None)
+    residual = y - X @ coefficients
+    r_squared = 1.0 - residual @ residual / np.sum((y - y.mean()) ** 2)
+    return Level1Predictor(tuple(names), tuple(float(c) for c in coefficients), float(r_squared))
 
 
 def reproduce(k: float = DEFAULT_K, progress=None) -> Reproduction:
     """Tables 2–4 and the library-wide level-1 study."""
     library = library_level1(k, progress=progress)
     rho, p = spearmanr([r.Rf for r in library], [r.ces99_mean_dE00 for r in library])
-    daylight = _near_daylight(library)
-    rho_daylight, _ = spearmanr([r.Rf for r in daylight], [r.ces99_mean_dE00 for r in daylight])
     return Reproduction(table2=table2(), table3=table3(k), table4=table4(k), library=library,
                         rf_spearman_rho=float(rho), rf_spearman_p=float(p),
-                        rf_spearman_rho_daylight=float(rho_daylight),
-                        rf_threshold_for_1dE=_rf_threshold(library))
+                        predictor_rf=_predictor(library, use_mired=False),
+                        predictor_rf_cct=_predictor(library, use_mired=True))

@@ -172,10 +172,11 @@ def write_spectrum_tm27(sd: colour.SpectralDistribution, path, *, description: s
 
     def write(tmp):
         document = colour.io.SpectralDistribution_IESTM2714(
-            path=tmp, header=header, spectral_quantity="relative",
+            header=header, spectral_quantity="relative",
             reflection_geometry="other", transmission_geometry="other",
             bandwidth_FWHM=float(np.min(np.diff(sd.wavelengths))), bandwidth_corrected=False,
             data=np.asarray(sd.values), domain=np.asarray(sd.wavelengths))
+        document.path = tmp  # set after construction: a path given to it is read at once
         document.write()
 
     return _atomic_write(Path(path), write)

@@ -1,0 +1,442 @@
+"""The measurement journal: a crash-safe, append-only record of a session (design §4).
+
+A journal is a text file of JSON lines (``journal.jsonl``):
+
+1. a **header** record, written when the session starts::
+
+       {"record": "header", "format": "vr-workbench-journal/1", "software": "vr-colour-workbench 0.1.0",
+        "started_utc": "2025-01-01T12:00:00+00:00", "started_epoch_s": 1735732800.0,
+        "plan": {"name": "paper", "seed": 7, "patches": [["black", 0, 0, 0], ...]},
+        "instrument": {"name": "CS-2000", "model": "CS-2000", "serial": "12345"},
+        "display": "simulated OLED HMD (...)", "settings": {...}}
+
+2. one **measurement** record per patch, appended, flushed and ``fsync``-ed
+   before the next patch is shown::
+
+       {"record": "measurement", "index": 0, "kind": "black", "rgb": [0, 0, 0], "status": "ok",
+        "t_s": 0.0, "duration_s": 12.3, "XYZ": [..], "Lv": .., "xy": [..], "integration_s": ..,
+        "nd_used": false, "spectrum": {"start_nm": 380, "step_nm": 1, "values": [...]}}
+
+   or, for a patch that failed after the instrument's own recovery,
+   ``"status": "failed", "reason": "CS-2000 ER10: ..."`` and no values;
+
+3. a **resume** record each time ``--resume`` picks the session up again.
+
+Nothing is ever rewritten in place. A crash can leave a truncated last line;
+:func:`read_journal` ignores it (and reports that it did), and
+:meth:`JournalWriter.append_to` cuts it off before appending. ``index`` is the
+patch's position in the plan; a patch whose latest record is ``failed`` is
+measured again on resume, and its later record supersedes the earlier one.
+
+Units as in :mod:`workbench`: XYZ and ``Lv`` absolute (cd/m²), spectral
+radiance in W·sr⁻¹·m⁻²·nm⁻¹, ``t_s`` seconds since the session began (the
+instrument's modelled time for simulated sessions), DAC values 0..255.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from workbench import __version__
+from workbench.errors import SpectrumFileError
+from workbench.measurement.plans import MeasurementPlan, Patch
+from workbench.session import Session
+
+__all__ = [
+    "JOURNAL_FORMAT",
+    "SOFTWARE",
+    "JournalHeader",
+    "JournalRecord",
+    "Journal",
+    "JournalWriter",
+    "read_journal",
+    "journal_to_session",
+]
+
+JOURNAL_FORMAT = "vr-workbench-journal/1"
+"""Format tag of the header record."""
+
+SOFTWARE = f"vr-colour-workbench {__version__}"
+"""Software name and version written into every header and resume record."""
+
+
+def _utc_iso(epoch_s: float) -> str:
+    return _dt.datetime.fromtimestamp(epoch_s, _dt.timezone.utc).isoformat(timespec="seconds")
+
+
+@dataclass(frozen=True)
+class JournalHeader:
+    """The first record of a journal: what is measured, with what, by what.
+
+    Attributes
+    ----------
+    plan : MeasurementPlan
+        The full plan, so that a resumed session shows exactly the same patches.
+    instrument : dict
+        Identity of the instrument (name, model, serial).
+    display : str
+        What showed the patches.
+    settings : dict
+        Anything else worth keeping (simulated effects, time scale, …).
+    software : str
+        Name and version of the software that started the session.
+    started_epoch_s : float
+        Start time in seconds since the Unix epoch (now, by default).
+    """
+
+    plan: MeasurementPlan
+    instrument: dict
+    display: str
+    settings: dict = field(default_factory=dict)
+    software: str = SOFTWARE
+    started_epoch_s: float = field(default_factory=time.time)
+
+    @property
+    def started_utc(self) -> str:
+        """Start time, ISO 8601 in UTC."""
+        return _utc_iso(self.started_epoch_s)
+
+    def to_json(self) -> dict:
+        return {
+            "record": "header",
+            "format": JOURNAL_FORMAT,
+            "software": self.software,
+            "started_utc": self.started_utc,
+            "started_epoch_s": self.started_epoch_s,
+            "plan": {
+                "name": self.plan.name,
+                "seed": self.plan.seed,
+                "patches": [[p.kind, *p.rgb] for p in self.plan.patches],
+            },
+            "instrument": self.instrument,
+            "display": self.display,
+            "settings": self.settings,
+        }
+
+    @classmethod
+    def from_json(cls, data: dict) -> "JournalHeader":
+        plan = data["plan"]
+        patches = tuple(Patch(str(kind), (int(r), int(g), int(b))) for kind, r, g, b in plan["patches"])
+        return cls(
+            plan=MeasurementPlan(str(plan["name"]), patches, plan.get("seed")),
+            instrument=dict(data.get("instrument") or {}),
+            display=str(data.get("display", "")),
+            settings=dict(data.get("settings") or {}),
+            software=str(data.get("software", "")),
+            started_epoch_s=float(data.get("started_epoch_s", 0.0)),
+        )
+
+
+@dataclass(frozen=True)
+class JournalRecord:
+    """One measurement (or one failed attempt) of one patch.
+
+    Attributes
+    ----------
+    index : int
+        Position of the patch in the plan.
+    kind : str
+    rgb : (int, int, int)
+    status : str
+        ``"ok"`` or ``"failed"``.
+    t_s : float
+        Session-clock time at which the patch was shown, seconds.
+    duration_s : float
+        Session-clock time the patch took (show + measure), seconds.
+    XYZ : (float, float, float) or None
+        Absolute tristimulus values (cd/m²); ``None`` when failed.
+    Lv : float or None
+        Luminance, cd/m².
+    xy : (float, float) or None
+        CIE 1931 chromaticity (``None`` also when not computable, e.g. black).
+    integration_s : float or None
+        The instrument's integration time.
+    nd_used : bool or None
+        Whether the instrument's internal ND filter was in.
+    wavelengths : ndarray or None
+        Wavelengths (nm) of ``spectrum``.
+    spectrum : ndarray or None
+        Spectral radiance, W·sr⁻¹·m⁻²·nm⁻¹.
+    reason : str
+        Why the patch failed (empty when ok).
+    """
+
+    index: int
+    kind: str
+    rgb: tuple
+    status: str
+    t_s: float
+    duration_s: float
+    XYZ: tuple | None = None
+    Lv: float | None = None
+    xy: tuple | None = None
+    integration_s: float | None = None
+    nd_used: bool | None = None
+    wavelengths: np.ndarray | None = field(default=None, compare=False)
+    spectrum: np.ndarray | None = field(default=None, compare=False)
+    reason: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    def patch(self) -> Patch:
+        return Patch(self.kind, tuple(self.rgb))
+
+    def to_json(self) -> dict:
+        data = {
+            "record": "measurement",
+            "index": self.index,
+            "kind": self.kind,
+            "rgb": list(self.rgb),
+            "status": self.status,
+            "t_s": round(self.t_s, 6),
+            "duration_s": round(self.duration_s, 6),
+        }
+        if self.ok:
+            data.update(
+                XYZ=list(self.XYZ),
+                Lv=self.Lv,
+                xy=None if self.xy is None else list(self.xy),
+                integration_s=self.integration_s,
+                nd_used=self.nd_used,
+            )
+            if self.spectrum is not None:
+                step = float(np.median(np.diff(self.wavelengths))) if len(self.wavelengths) > 1 else 1.0
+                data["spectrum"] = {
+                    "start_nm": float(self.wavelengths[0]),
+                    "step_nm": step,
+                    "values": [float(f"{v:.7g}") for v in self.spectrum],
+                }
+        else:
+            data["reason"] = self.reason
+        return data
+
+    @classmethod
+    def from_json(cls, data: dict) -> "JournalRecord":
+        spectrum = data.get("spectrum")
+        wavelengths = values = None
+        if spectrum:
+            values = np.asarray(spectrum["values"], dtype=float)
+            wavelengths = spectrum["start_nm"] + spectrum["step_nm"] * np.arange(len(values))
+        return cls(
+            index=int(data["index"]),
+            kind=str(data["kind"]),
+            rgb=tuple(int(v) for v in data["rgb"]),
+            status=str(data["status"]),
+            t_s=float(data["t_s"]),
+            duration_s=float(data.get("duration_s", 0.0)),
+            XYZ=None if data.get("XYZ") is None else tuple(float(v) for v in data["XYZ"]),
+            Lv=None if data.get("Lv") is None else float(data["Lv"]),
+            xy=None if data.get("xy") is None else tuple(float(v) for v in data["xy"]),
+            integration_s=data.get("integration_s"),
+            nd_used=data.get("nd_used"),
+            wavelengths=wavelengths,
+            spectrum=values,
+            reason=str(data.get("reason", "")),
+        )
+
+
+@dataclass(frozen=True)
+class Journal:
+    """A journal as read back.
+
+    Attributes
+    ----------
+    path : Path
+    header : JournalHeader
+    records : tuple of JournalRecord
+        Every measurement record, in file order (failed attempts included).
+    resumes : tuple of dict
+        The resume records.
+    truncated : bool
+        Whether an incomplete last line (a crash mid-write) was ignored.
+    complete_bytes : int
+        Length of the file up to the end of its last complete line.
+    """
+
+    path: Path
+    header: JournalHeader
+    records: tuple
+    resumes: tuple = ()
+    truncated: bool = False
+    complete_bytes: int = 0
+
+    def latest(self) -> dict:
+        """The latest record of each plan index that has one: ``{index: JournalRecord}``."""
+        return {record.index: record for record in self.records}
+
+    def ok_records(self) -> list:
+        """The successful measurements, in plan order."""
+        return [r for _, r in sorted(self.latest().items()) if r.ok]
+
+    def failed_records(self) -> list:
+        """Patches whose latest attempt failed, in plan order."""
+        return [r for _, r in sorted(self.latest().items()) if not r.ok]
+
+    def pending_indices(self) -> list:
+        """Plan indices still to measure: no record yet, or the latest attempt failed."""
+        latest = self.latest()
+        return [i for i in range(len(self.header.plan)) if i not in latest or not latest[i].ok]
+
+
+def read_journal(path: str | os.PathLike) -> Journal:
+    """Read a journal, ignoring a truncated last line.
+
+    Raises
+    ------
+    SpectrumFileError
+        If the file is missing, has no header, or a complete line (not the
+        last) is not a valid record; the message names the line and the fix.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SpectrumFileError(path, None, "no such journal", "give the directory of an earlier run (DIR/journal.jsonl)")
+    data = path.read_bytes()
+    lines = data.split(b"\n")
+    tail = lines.pop()  # bytes after the last newline: empty, or a line cut short by a crash
+    truncated = bool(tail.strip())
+    complete_bytes = len(data) - len(tail)
+    header, records, resumes = None, [], []
+    for number, raw in enumerate(lines, start=1):
+        if not raw.strip():
+            continue
+        try:
+            entry = json.loads(raw)
+            kind = entry["record"]
+            if kind == "header":
+                if header is not None:
+                    raise ValueError("a second header")
+                if entry.get("format") != JOURNAL_FORMAT:
+                    raise ValueError(f"format {entry.get('format')!r}, not {JOURNAL_FORMAT!r}")
+                header = JournalHeader.from_json(entry)
+            elif header is None:
+                raise ValueError("a record before the header")
+            elif kind == "measurement":
+                record = JournalRecord.from_json(entry)
+                if not 0 <= record.index < len(header.plan):
+                    raise ValueError(f"patch index {record.index} outside the plan's {len(header.plan)} patches")
+                records.append(record)
+            elif kind == "resume":
+                resumes.append(entry)
+            else:
+                raise ValueError(f"unknown record type {kind!r}")
+        except (ValueError, KeyError, TypeError) as error:
+            raise SpectrumFileError(
+                path, number, f"not a valid journal record ({error})",
+                "journals are written by `vr-workbench measure`; restore the file from a backup or start a new run",
+            ) from None
+    if header is None:
+        raise SpectrumFileError(path, 1, "no header record",
+                                "the run died before it started; delete the directory and start again")
+    return Journal(path, header, tuple(records), tuple(resumes), truncated, complete_bytes)
+
+
+class JournalWriter:
+    """Appends records to a journal, each flushed and fsynced before returning.
+
+    Use :meth:`create` for a new session and :meth:`append_to` to resume one.
+    """
+
+    def __init__(self, path: Path, handle):
+        self.path = path
+        self._handle = handle
+
+    @classmethod
+    def create(cls, path: str | os.PathLike, header: JournalHeader) -> "JournalWriter":
+        """Start a new journal at ``path`` (which must not exist) with ``header``."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            handle = open(path, "xb")
+        except FileExistsError:
+            raise SpectrumFileError(
+                path, None, "a journal already exists here",
+                "add --resume to continue that run, or choose another --out directory",
+            ) from None
+        writer = cls(path, handle)
+        writer._write(header.to_json())
+        _fsync_directory(path.parent)
+        return writer
+
+    @classmethod
+    def append_to(cls, journal: Journal) -> "JournalWriter":
+        """Continue ``journal``: cut off a truncated last line, then append a resume record."""
+        handle = open(journal.path, "r+b")
+        handle.truncate(journal.complete_bytes)
+        handle.seek(journal.complete_bytes)
+        writer = cls(journal.path, handle)
+        writer._write({"record": "resume", "software": SOFTWARE, "time_utc": _utc_iso(time.time()),
+                       "measured_before": len(journal.records)})
+        return writer
+
+    def _write(self, entry: dict) -> None:
+        line = json.dumps(entry, separators=(",", ":"), allow_nan=False).encode("utf-8") + b"\n"
+        self._handle.write(line)
+        self._handle.flush()
+        os.fsync(self._handle.fileno())
+
+    def write_record(self, record: JournalRecord) -> None:
+        """Append one measurement record; on return it is on disk."""
+        self._write(record.to_json())
+
+    def close(self) -> None:
+        if not self._handle.closed:
+            self._handle.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def _fsync_directory(directory: Path) -> None:
+    """Make a new file's directory entry durable (POSIX; a no-op where unsupported)."""
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def journal_to_session(journal: Journal) -> Session:
+    """The successful measurements of ``journal`` as a :class:`~workbench.session.Session`.
+
+    Rows are in plan order; failed patches are left out. Spectra are included
+    when every successful record has one on the same wavelengths.
+    """
+    records = journal.ok_records()
+    if not records:
+        raise SpectrumFileError(journal.path, None, "the journal holds no successful measurement",
+                                "run (or resume) the measurement first")
+    spectra = wavelengths = None
+    if all(r.spectrum is not None for r in records):
+        wavelengths = records[0].wavelengths
+        if all(len(r.wavelengths) == len(wavelengths) and np.allclose(r.wavelengths, wavelengths) for r in records):
+            spectra = np.array([r.spectrum for r in records])
+        else:
+            wavelengths = None
+    return Session(
+        kind=np.array([r.kind for r in records], dtype=object),
+        rgb=np.array([r.rgb for r in records], dtype=float),
+        XYZ=np.array([r.XYZ for r in records], dtype=float),
+        t_s=np.array([r.t_s for r in records], dtype=float),
+        wavelengths=wavelengths,
+        spectra=spectra,
+        source=str(journal.path),
+        metadata={"plan": journal.header.plan.name, "instrument": journal.header.instrument,
+                  "display": journal.header.display, "software": journal.header.software},
+    )

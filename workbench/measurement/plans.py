@@ -1,0 +1,239 @@
+"""Measurement plans: which patches a calibration shows, in which order.
+
+A plan is a sequence of :class:`Patch` (a session kind and the DAC triplet to
+show). :data:`MEASUREMENT_PLANS` holds the built-in plans and
+:func:`measurement_plan` picks one by name; :func:`read_plan_file` reads a plan
+from a CSV file with columns ``kind,r,g,b``.
+
+Built-in plans
+--------------
+``paper``
+    As in Díaz-Barrancas et al. (2020): black, white, each channel swept from 5
+    to 255 in steps of 5 (kinds ``ramp-r``, ``ramp-g``, ``ramp-b``), then 50
+    seeded random validation colours; a white is re-measured after every 25
+    patches, and once more at the end, as drift references (214 patches).
+``quick``
+    The same structure with five levels per channel (51 to 255 in steps of 51)
+    and 10 validation colours, for a fast look (28 patches).
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from workbench.errors import InputError, SpectrumFileError
+from workbench.session import SESSION_KINDS
+
+__all__ = [
+    "Patch",
+    "MeasurementPlan",
+    "DRIFT_REFERENCE_INTERVAL",
+    "MEASUREMENT_PLANS",
+    "measurement_plan",
+    "measurement_plan_paper",
+    "measurement_plan_quick",
+    "read_plan_file",
+]
+
+DRIFT_REFERENCE_INTERVAL = 25
+"""A white drift reference is shown after this many patches without one."""
+
+_BLACK, _WHITE = (0, 0, 0), (255, 255, 255)
+_RAMP_KINDS = {"ramp-r": 0, "ramp-g": 1, "ramp-b": 2}
+
+
+@dataclass(frozen=True)
+class Patch:
+    """One patch of a plan.
+
+    Attributes
+    ----------
+    kind : str
+        A session kind (``black``, ``white``, ``ramp-r`` … ``validation``).
+    rgb : (int, int, int)
+        DAC values to show, 0..255.
+    """
+
+    kind: str
+    rgb: tuple
+
+    def describe(self) -> str:
+        """E.g. ``"ramp-g (0, 35, 0)"``."""
+        return f"{self.kind} ({self.rgb[0]}, {self.rgb[1]}, {self.rgb[2]})"
+
+
+@dataclass(frozen=True)
+class MeasurementPlan:
+    """A named sequence of patches.
+
+    Attributes
+    ----------
+    name : str
+        ``paper``, ``quick``, or the plan file's path.
+    patches : tuple of Patch
+    seed : int or None
+        Seed of the random validation colours (``None`` for a plan file).
+    """
+
+    name: str
+    patches: tuple
+    seed: int | None = None
+
+    def __len__(self) -> int:
+        return len(self.patches)
+
+    def counts(self) -> dict:
+        """Number of patches of each kind, in first-appearance order."""
+        counts: dict = {}
+        for patch in self.patches:
+            counts[patch.kind] = counts.get(patch.kind, 0) + 1
+        return counts
+
+
+def _ramps(levels) -> list:
+    patches = []
+    for kind, channel in _RAMP_KINDS.items():
+        for level in levels:
+            rgb = [0, 0, 0]
+            rgb[channel] = int(level)
+            patches.append(Patch(kind, tuple(rgb)))
+    return patches
+
+
+def _validation(count: int, seed: int) -> list:
+    rng = np.random.default_rng(seed)
+    return [Patch("validation", tuple(int(v) for v in rgb)) for rgb in rng.integers(0, 256, size=(count, 3))]
+
+
+def _with_drift_references(patches: list, interval: int = DRIFT_REFERENCE_INTERVAL) -> tuple:
+    """Insert a white after every ``interval`` patches without one, and end on a white."""
+    out, since_white = [], 0
+    for patch in patches:
+        out.append(patch)
+        since_white = 0 if patch.kind == "white" else since_white + 1
+        if since_white == interval:
+            out.append(Patch("white", _WHITE))
+            since_white = 0
+    if out[-1].kind != "white":
+        out.append(Patch("white", _WHITE))
+    return tuple(out)
+
+
+def _plan(name: str, levels, validation_count: int, seed: int) -> MeasurementPlan:
+    patches = [Patch("black", _BLACK), Patch("white", _WHITE), *_ramps(levels),
+               *_validation(validation_count, seed)]
+    return MeasurementPlan(name, _with_drift_references(patches), seed)
+
+
+def measurement_plan_paper(seed: int) -> MeasurementPlan:
+    """The paper's plan: black, white, 5..255 step 5 per channel, 50 validation colours.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the validation colours (uniform over the 8-bit RGB cube).
+
+    Returns
+    -------
+    MeasurementPlan
+        214 patches: 1 black, 1 + 9 whites, 3 × 51 ramp levels, 50 validation.
+
+    References
+    ----------
+    Díaz-Barrancas et al. (2020), Sensors 20(19) 5658, section 2.
+    """
+    return _plan("paper", range(5, 256, 5), 50, seed)
+
+
+def measurement_plan_quick(seed: int) -> MeasurementPlan:
+    """A fast look: black, white, 51..255 step 51 per channel, 10 validation colours (28 patches)."""
+    return _plan("quick", range(51, 256, 51), 10, seed)
+
+
+MEASUREMENT_PLANS = {
+    "paper": measurement_plan_paper,
+    "quick": measurement_plan_quick,
+}
+"""Built-in plans by name: each a function of the validation seed."""
+
+
+def measurement_plan(name: str, seed: int) -> MeasurementPlan:
+    """The built-in plan ``name`` with validation colours drawn from ``seed``.
+
+    Raises
+    ------
+    InputError
+        For an unknown name; the message lists the valid ones.
+    """
+    try:
+        build = MEASUREMENT_PLANS[name]
+    except KeyError:
+        raise InputError(
+            f"unknown measurement plan {name!r}; use one of {', '.join(MEASUREMENT_PLANS)}, "
+            "or --plan-file FILE with columns kind,r,g,b"
+        ) from None
+    return build(int(seed))
+
+
+def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
+    """Read a plan from a CSV file with a header ``kind,r,g,b`` (any order, any case).
+
+    Parameters
+    ----------
+    path : path-like
+        One row per patch, in the order to show them; ``kind`` is a session
+        kind, ``r,g,b`` are integer DAC values 0..255.
+
+    Returns
+    -------
+    MeasurementPlan
+        Named after the file; shown exactly as listed (no drift references added).
+
+    Raises
+    ------
+    SpectrumFileError
+        Naming the file, the line and the fix.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SpectrumFileError(path, None, "no such plan file", "check the path given to --plan-file")
+    patches = []
+    with path.open(newline="", encoding="utf-8-sig") as handle:
+        reader = csv.reader(handle)
+        header = next(reader, None)
+        if header is None:
+            raise SpectrumFileError(path, 1, "the file is empty", "write a header row kind,r,g,b then one row per patch")
+        columns = {name.strip().lower(): i for i, name in enumerate(header)}
+        missing = [name for name in ("kind", "r", "g", "b") if name not in columns]
+        if missing:
+            raise SpectrumFileError(path, 1, f"the header lacks column(s) {missing}",
+                                    "the first row must name the columns kind,r,g,b (any order, any case)")
+        for line, row in enumerate(reader, start=2):
+            if not row or all(not cell.strip() for cell in row):
+                continue
+            if len(row) < len(header):
+                raise SpectrumFileError(path, line, f"the row has {len(row)} fields, the header {len(header)}",
+                                        "give every row a kind and three DAC values")
+            kind = row[columns["kind"]].strip().lower()
+            if kind not in SESSION_KINDS:
+                raise SpectrumFileError(path, line, f"unknown kind {kind!r}", f"use one of {', '.join(SESSION_KINDS)}")
+            rgb = []
+            for channel in "rgb":
+                text = row[columns[channel]].strip()
+                try:
+                    value = int(text)
+                except ValueError:
+                    value = None
+                if value is None or not 0 <= value <= 255:
+                    raise SpectrumFileError(path, line, f"column {channel!r} holds {text!r}",
+                                            "write an integer DAC value 0..255")
+                rgb.append(value)
+            patches.append(Patch(kind, tuple(rgb)))
+    if not patches:
+        raise SpectrumFileError(path, None, "the file has a header but no patches", "add one row kind,r,g,b per patch")
+    return MeasurementPlan(str(path), tuple(patches), None)

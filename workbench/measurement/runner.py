@@ -1,0 +1,516 @@
+"""The measurement runner: show each patch, measure it, journal it (no Qt).
+
+:class:`MeasurementRun` is a generator worker in the style of napari's
+``GeneratorWorker`` and pymeasure's ``Procedure``: iterating :meth:`MeasurementRun.events`
+performs the run and yields one event per step (:class:`RunStarted`,
+:class:`PatchStarted`, :class:`PatchMeasured`, :class:`RunPaused`,
+:class:`RunResumed`, and last :class:`RunFinished`). The same run drives the
+command line (a tqdm bar) and the GUI (a worker thread); :meth:`pause`,
+:meth:`resume` and :meth:`cancel` may be called from any thread.
+
+For each pending patch of the plan the runner shows it on the
+:class:`~instruments.patch_display.PatchDisplay`, measures it with the meter
+(the CS-2000 driver, or anything with the same ``identify``/``measure``), and
+appends a record to the journal (flushed and fsynced before the next patch).
+Then:
+
+* a patch that fails after the instrument's own recovery (an instrument error
+  code, a timeout) is journaled as ``failed`` with the reason and the run
+  continues; after :attr:`MeasurementRun.max_consecutive_failures` failures in
+  a row the run stops (:class:`RunAborted`), since the instrument needs a look;
+* the instrument's port vanishing, or the patch display failing, stops the run
+  with :class:`RunAborted`, naming the patch; the journal keeps every earlier
+  measurement, and a resumed run starts with that patch;
+* a resumed run measures the patches that have no record yet and those whose
+  latest attempt failed, never one that was measured;
+* at the end the session is exported as ``session.csv`` (with ``nm380`` …
+  ``nm780`` spectral columns) and ``session.ti3``.
+
+Times: ``t_s`` in the journal is the session clock's reading when the patch was
+shown (:class:`SessionClock`: wall-clock seconds since the session began for a
+real instrument; the modelled instrument time for a simulated one); progress
+ETAs are wall-clock seconds from :class:`~workbench.measurement.eta.PatchDurationModel`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterator, Protocol
+
+import numpy as np
+
+from instruments.cs2000 import CS2000Error, MeasurementCancelled, PortVanishedError
+from instruments.patch_display import PatchDisplayError
+from workbench.errors import InputError, WorkbenchError
+from workbench.measurement.eta import PatchDurationModel
+from workbench.measurement.journal import (
+    Journal,
+    JournalHeader,
+    JournalRecord,
+    JournalWriter,
+    journal_to_session,
+    read_journal,
+)
+from workbench.measurement.plans import MeasurementPlan, Patch
+from workbench.measurement.ti3 import write_session_ti3
+from workbench.session import write_session_csv
+
+__all__ = [
+    "JOURNAL_NAME",
+    "SESSION_CSV_NAME",
+    "SESSION_TI3_NAME",
+    "Meter",
+    "SessionClock",
+    "WallSessionClock",
+    "RunAborted",
+    "RunStarted",
+    "PatchStarted",
+    "PatchMeasured",
+    "RunPaused",
+    "RunResumed",
+    "RunSummary",
+    "RunFinished",
+    "MeasurementRun",
+]
+
+_LOG = logging.getLogger(__name__)
+
+JOURNAL_NAME = "journal.jsonl"
+SESSION_CSV_NAME = "session.csv"
+SESSION_TI3_NAME = "session.ti3"
+
+_PAUSE_POLL_S = 0.1  # how often a paused run looks at its cancel flag
+
+
+class Meter(Protocol):
+    """What the runner needs of an instrument (the CS-2000 driver has it)."""
+
+    def identify(self) -> Any:
+        """An object with ``name``, ``model`` and ``serial``."""
+
+    def measure(self, progress: Callable[[float, float], None] | None = None, cancel: Any = None) -> Any:
+        """A measurement with ``XYZ``, ``Lv``, ``xy``, ``wavelengths``, ``radiance``,
+        ``integration_s`` and ``nd_used``; honours ``cancel`` (raises
+        :class:`~instruments.cs2000.MeasurementCancelled`)."""
+
+
+class SessionClock(Protocol):
+    """Seconds since the session began."""
+
+    def now(self) -> float:
+        ...
+
+
+@dataclass(frozen=True)
+class WallSessionClock:
+    """Wall-clock seconds since ``started_epoch_s`` (the journal header's start).
+
+    A resumed session keeps counting from the original start, gap included:
+    the display stayed on (or cooled down) in between, and ``t_s`` says so.
+    """
+
+    started_epoch_s: float
+
+    def now(self) -> float:
+        return time.time() - self.started_epoch_s
+
+
+class RunAborted(WorkbenchError):
+    """The run had to stop (port vanished, display lost, repeated failures).
+
+    Attributes
+    ----------
+    index : int
+        Plan index of the patch that was in flight.
+    patch : Patch
+    """
+
+    def __init__(self, message: str, index: int, patch: Patch):
+        super().__init__(message)
+        self.index, self.patch = index, patch
+
+
+@dataclass(frozen=True)
+class RunStarted:
+    """The run begins: ``done`` of ``total`` patches are already measured (resume)."""
+
+    total: int
+    done: int
+    resumed: bool
+
+
+@dataclass(frozen=True)
+class PatchStarted:
+    """Patch ``index`` is about to be shown; ``eta_s`` estimates the rest of the run."""
+
+    index: int
+    patch: Patch
+    done: int
+    total: int
+    eta_s: float | None
+
+
+@dataclass(frozen=True)
+class PatchMeasured:
+    """Patch ``index`` was measured (or failed) and journaled."""
+
+    record: JournalRecord
+    done: int
+    total: int
+    eta_s: float | None
+
+
+@dataclass(frozen=True)
+class RunPaused:
+    """The run is paused before the patch ``next_index``."""
+
+    done: int
+    total: int
+    next_index: int
+
+
+@dataclass(frozen=True)
+class RunResumed:
+    """A paused run continues."""
+
+    done: int
+    total: int
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """How a run ended.
+
+    Attributes
+    ----------
+    status : str
+        ``"finished"`` or ``"cancelled"``.
+    planned : int
+        Patches in the plan.
+    measured : int
+        Patches with a successful measurement (this run and earlier ones).
+    failed : tuple of JournalRecord
+        Patches whose latest attempt failed.
+    session_s : float
+        Session-clock time at the end (simulated time for a simulated instrument).
+    wall_s : float
+        Wall-clock time this run (this process) took.
+    outputs : tuple of Path
+        Files written (journal, session CSV, ``.ti3``).
+    """
+
+    status: str
+    planned: int
+    measured: int
+    failed: tuple
+    session_s: float
+    wall_s: float
+    outputs: tuple = field(default_factory=tuple)
+
+    def one_line(self, session_label: str = "session") -> str:
+        """E.g. ``finished: 214 of 214 patches measured, 0 failed; session 2 h 13 min, wall 12.3 s``."""
+        failed = "; ".join(f"#{r.index} {r.patch().describe()}: {r.reason}" for r in self.failed)
+        return (
+            f"{self.status}: {self.measured} of {self.planned} patches measured, "
+            f"{len(self.failed)} failed{' (' + failed + ')' if failed else ''}; "
+            f"{session_label} {format_duration(self.session_s)}, wall {format_duration(self.wall_s)}"
+        )
+
+
+@dataclass(frozen=True)
+class RunFinished:
+    """The last event of a run that was not aborted."""
+
+    summary: RunSummary
+
+
+def format_duration(seconds: float) -> str:
+    """``"2 h 13 min"``, ``"4 min 05 s"``, ``"12.3 s"``."""
+    if seconds >= 3600:
+        return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60):02d} min"
+    if seconds >= 60:
+        return f"{int(seconds // 60)} min {int(seconds % 60):02d} s"
+    return f"{seconds:.1f} s"
+
+
+def _finite_or_none(values) -> list | None:
+    values = [float(v) for v in np.ravel(values)]
+    return values if all(math.isfinite(v) for v in values) else None
+
+
+class MeasurementRun:
+    """A crash-safe measurement run over a plan.
+
+    Create it with :meth:`start` (a new session) or :meth:`resume_session`
+    (continue the journal in an output directory), then iterate :meth:`events`.
+
+    Parameters
+    ----------
+    out_dir : Path
+        Holds ``journal.jsonl``, ``session.csv`` and ``session.ti3``.
+    journal : Journal or None
+        The journal read back when resuming.
+    writer : JournalWriter
+    display : PatchDisplay
+    meter : Meter
+    clock : SessionClock
+    on_countdown : callable, optional
+        ``on_countdown(remaining_s, total_s)`` while the instrument measures.
+    settle_s : float
+        Seconds to wait after the display confirms a patch before measuring.
+    max_consecutive_failures : int
+        Stop the run after this many failed patches in a row.
+    """
+
+    def __init__(self, out_dir: Path, header: JournalHeader, journal: Journal | None, writer: JournalWriter,
+                 display, meter: Meter, clock: SessionClock, *,
+                 on_countdown: Callable[[float, float], None] | None = None,
+                 settle_s: float = 0.0, max_consecutive_failures: int = 3):
+        self.out_dir = Path(out_dir)
+        self.header = header
+        self.plan: MeasurementPlan = header.plan
+        self.display = display
+        self.meter = meter
+        self.clock = clock
+        self.on_countdown = on_countdown
+        self.settle_s = float(settle_s)
+        self.max_consecutive_failures = int(max_consecutive_failures)
+        self._writer = writer
+        self._latest: dict = {} if journal is None else journal.latest()
+        self._resumed = journal is not None
+        self._cancel = threading.Event()
+        self._running = threading.Event()
+        self._running.set()
+        self.durations = PatchDurationModel()
+
+    # -- construction -------------------------------------------------------------------
+
+    @classmethod
+    def start(cls, out_dir, plan: MeasurementPlan, display, meter: Meter, *,
+              display_name: str = "", settings: dict | None = None,
+              clock: Callable[[JournalHeader, Journal | None], SessionClock] | None = None,
+              **options) -> "MeasurementRun":
+        """A new session: identify the instrument and write the journal header.
+
+        Parameters
+        ----------
+        out_dir : path-like
+            Output directory; must not hold a journal yet.
+        plan : MeasurementPlan
+        display : PatchDisplay
+        meter : Meter
+        display_name : str
+            What showed the patches, for the journal header.
+        settings : dict, optional
+            Extra settings to keep in the header (effects, time scale, …).
+        clock : callable, optional
+            ``clock(header, journal)`` returns the session clock; a
+            :class:`WallSessionClock` from the header's start by default.
+        **options
+            ``on_countdown``, ``settle_s``, ``max_consecutive_failures``.
+        """
+        out_dir = Path(out_dir)
+        header = JournalHeader(plan=plan, instrument=_identity(meter), display=display_name,
+                               settings=dict(settings or {}))
+        writer = JournalWriter.create(out_dir / JOURNAL_NAME, header)
+        make_clock = clock or (lambda h, j: WallSessionClock(h.started_epoch_s))
+        return cls(out_dir, header, None, writer, display, meter, make_clock(header, None), **options)
+
+    @classmethod
+    def resume_session(cls, out_dir, display, meter: Meter, *, plan: MeasurementPlan | None = None,
+               clock: Callable[[JournalHeader, Journal | None], SessionClock] | None = None,
+               **options) -> "MeasurementRun":
+        """Continue the session journaled in ``out_dir``.
+
+        Parameters
+        ----------
+        plan : MeasurementPlan, optional
+            If given, it must equal the journal's plan (same patches in the
+            same order): a resumed run never changes what is measured.
+
+        Raises
+        ------
+        InputError
+            If ``plan`` differs from the journal's, or the instrument is another one.
+        """
+        out_dir = Path(out_dir)
+        journal = read_journal(out_dir / JOURNAL_NAME)
+        if journal.truncated:
+            _LOG.warning("%s: ignoring an incomplete last line (the run died while writing it)", journal.path)
+        header = journal.header
+        if plan is not None and plan.patches != header.plan.patches:
+            raise InputError(
+                f"{journal.path} was measured with plan {header.plan.name!r} (seed {header.plan.seed}), "
+                f"which differs from the plan given now ({plan.name!r}, seed {plan.seed}); "
+                "resume without --plan/--plan-file/--seed, or give the same ones as the first run"
+            )
+        identity = _identity(meter)
+        if header.instrument.get("serial") and identity.get("serial") != header.instrument.get("serial"):
+            raise InputError(
+                f"{journal.path} was measured with instrument serial {header.instrument.get('serial')!r}, "
+                f"this one is {identity.get('serial')!r}; resume with the same instrument, or start a new run"
+            )
+        writer = JournalWriter.append_to(journal)
+        make_clock = clock or (lambda h, j: WallSessionClock(h.started_epoch_s))
+        return cls(out_dir, header, journal, writer, display, meter, make_clock(header, journal), **options)
+
+    # -- control (any thread) -----------------------------------------------------------
+
+    def pause(self) -> None:
+        """Pause before the next patch (the patch in flight completes)."""
+        self._running.clear()
+
+    def resume(self) -> None:
+        """Continue a paused run."""
+        self._running.set()
+
+    def cancel(self) -> None:
+        """Cancel: the measurement in flight is stopped (``MEAS,0``) and the run ends."""
+        self._cancel.set()
+        self._running.set()
+
+    @property
+    def cancelled(self) -> bool:
+        return self._cancel.is_set()
+
+    # -- the run ------------------------------------------------------------------------
+
+    def pending_indices(self) -> list:
+        """Plan indices still to measure: no record yet, or the latest attempt failed."""
+        return [i for i in range(len(self.plan)) if i not in self._latest or not self._latest[i].ok]
+
+    def _done(self) -> int:
+        return sum(1 for r in self._latest.values() if r.ok)
+
+    def _eta(self, pending: list) -> float | None:
+        return self.durations.remaining_s([self.plan.patches[i] for i in pending])
+
+    def events(self) -> Iterator:
+        """Perform the run, yielding one event per step; the last is :class:`RunFinished`.
+
+        Raises
+        ------
+        RunAborted
+            The instrument's port vanished, the display failed, or too many
+            patches failed in a row; the message names the patch and says to
+            resume. The journal is closed intact.
+        """
+        started = time.monotonic()
+        total = len(self.plan)
+        pending = self.pending_indices()
+        try:
+            yield RunStarted(total, self._done(), self._resumed)
+            consecutive_failures = 0
+            status = "finished"
+            for position, index in enumerate(pending):
+                if not self._running.is_set() and not self._cancel.is_set():
+                    yield RunPaused(self._done(), total, index)
+                    while not self._running.wait(_PAUSE_POLL_S):
+                        pass
+                    if not self._cancel.is_set():
+                        yield RunResumed(self._done(), total)
+                if self._cancel.is_set():
+                    status = "cancelled"
+                    break
+                patch = self.plan.patches[index]
+                yield PatchStarted(index, patch, self._done(), total, self._eta(pending[position:]))
+                measured = self._measure_patch(index, patch)
+                if measured is None:
+                    status = "cancelled"
+                    break
+                record, wall_s = measured
+                self._writer.write_record(record)
+                self._latest[index] = record
+                self.durations.observe(patch, record.Lv, wall_s)
+                consecutive_failures = 0 if record.ok else consecutive_failures + 1
+                yield PatchMeasured(record, self._done(), total, self._eta(pending[position + 1:]))
+                if consecutive_failures >= self.max_consecutive_failures:
+                    raise RunAborted(
+                        f"{consecutive_failures} patches failed in a row, the last #{index} "
+                        f"{patch.describe()}: {record.reason}. The journal in {self.out_dir} keeps every "
+                        "measurement; check the instrument, then run again with --resume "
+                        "(failed patches are measured again)",
+                        index, patch,
+                    )
+            outputs = (self._writer.path,)
+            if status == "finished":
+                outputs += self.export()
+            failed = tuple(r for _, r in sorted(self._latest.items()) if not r.ok)
+            summary = RunSummary(status, total, self._done(), failed, self.clock.now(),
+                                 time.monotonic() - started, outputs)
+            yield RunFinished(summary)
+        finally:
+            self._writer.close()
+
+    def _measure_patch(self, index: int, patch: Patch) -> tuple[JournalRecord, float] | None:
+        """Show and measure one patch: the record to journal and the wall seconds it
+        took, or ``None`` if cancelled."""
+        where = f"patch #{index} of {len(self.plan)} ({patch.describe()})"
+        resume_hint = (f"The journal in {self.out_dir} keeps every measurement before it; "
+                       "fix the cause and run the same command with --resume")
+        wall_start = time.monotonic()
+        t_s = self.clock.now()
+        try:
+            self.display.show(list(patch.rgb))
+        except PatchDisplayError as error:
+            raise RunAborted(f"the display failed to show {where}: {error}. {resume_hint}", index, patch) from error
+        if self.settle_s > 0:
+            self._cancel.wait(self.settle_s)
+        try:
+            measurement = self.meter.measure(progress=self.on_countdown, cancel=self._cancel)
+        except MeasurementCancelled:
+            return None
+        except PortVanishedError as error:
+            raise RunAborted(f"the instrument's port vanished while measuring {where}: {error}. {resume_hint}",
+                             index, patch) from error
+        except CS2000Error as error:
+            _LOG.warning("%s failed: %s", where, error)
+            return self._failed(index, patch, t_s, wall_start, str(error))
+        except OSError as error:
+            raise RunAborted(f"the connection to the instrument failed while measuring {where}: {error}. "
+                             f"{resume_hint}", index, patch) from error
+        XYZ = _finite_or_none(measurement.XYZ)
+        if XYZ is None:
+            return self._failed(index, patch, t_s, wall_start,
+                                f"the instrument could not compute XYZ (sent {list(measurement.XYZ)})")
+        xy = _finite_or_none(measurement.xy)
+        record = JournalRecord(
+            index=index, kind=patch.kind, rgb=patch.rgb, status="ok", t_s=t_s,
+            duration_s=self.clock.now() - t_s, XYZ=tuple(XYZ),
+            Lv=float(measurement.Lv) if math.isfinite(measurement.Lv) else XYZ[1],
+            xy=None if xy is None else tuple(xy),
+            integration_s=None if measurement.integration_s is None else float(measurement.integration_s),
+            nd_used=None if measurement.nd_used is None else bool(measurement.nd_used),
+            wavelengths=np.asarray(measurement.wavelengths, dtype=float),
+            spectrum=np.asarray(measurement.radiance, dtype=float),
+        )
+        return record, time.monotonic() - wall_start
+
+    def _failed(self, index: int, patch: Patch, t_s: float, wall_start: float, reason: str):
+        record = JournalRecord(index=index, kind=patch.kind, rgb=patch.rgb, status="failed", t_s=t_s,
+                               duration_s=self.clock.now() - t_s, reason=reason)
+        return record, time.monotonic() - wall_start
+
+    def export(self) -> tuple:
+        """Write ``session.csv`` and ``session.ti3`` from the journal; returns their paths."""
+        journal = read_journal(self.out_dir / JOURNAL_NAME)
+        session = journal_to_session(journal)
+        instrument = " ".join(str(journal.header.instrument.get(k, "")) for k in ("model", "serial")).strip()
+        csv_path = write_session_csv(session, self.out_dir / SESSION_CSV_NAME)
+        if not np.any(session.mask("white") | np.all(session.rgb >= 255, axis=1)):
+            _LOG.warning("no white measured: %s not written (it is normalised to white)", SESSION_TI3_NAME)
+            return (csv_path,)
+        ti3_path = write_session_ti3(session, self.out_dir / SESSION_TI3_NAME,
+                                     instrument=f"Konica Minolta {instrument}".strip())
+        return csv_path, ti3_path
+
+
+def _identity(meter: Meter) -> dict:
+    """The instrument's identity as a JSON-able dict."""
+    identity = meter.identify()
+    return {key: str(getattr(identity, key, "")) for key in ("name", "model", "serial")}
