@@ -162,8 +162,12 @@ class GammaMatrixDisplay(DisplayModel):
             gamma, r2 = fit_power_law(levels / 255.0, XYZ[:, 1] / columns[-1][1])
             gammas.append(gamma)
             r_squared.append(r2)
-        return cls(gamma=gammas, matrix=np.column_stack(columns), white=session.white_XYZ,
-                   black=session.black_XYZ, r_squared=r_squared)
+        matrix = np.column_stack(columns)
+        has_white = session.mask("white").any() or np.any(np.all(session.rgb >= 255, axis=1))
+        # ramps-only data (e.g. Psychtoolbox): the white is the additive one the model predicts
+        white = session.white_XYZ if has_white else matrix.sum(axis=1)
+        return cls(gamma=gammas, matrix=matrix, white=white, black=session.black_XYZ,
+                   r_squared=r_squared)
 
     def describe(self) -> str:
         return "gamma-matrix (γ = " + ", ".join(f"{g:.2f}" for g in self.gamma) + ")"

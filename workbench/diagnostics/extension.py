@@ -1,0 +1,99 @@
+"""Fit the extended display model with exactly the terms the detectors found.
+
+Effect → term: ``black-offset`` → the black XYZ; ``tone-curve-shape`` → per
+channel the tone-curve form with the lowest BIC (GOG, extended power, or the
+monotone spline / 1D LUT); ``chromaticity-shift`` → level-dependent primaries;
+``channel-interaction`` → the load-dependent gain, its amount fitted on the
+white references (never on validation rows); ``temporal-drift`` → the fit data
+are divided by the drift ``g(t)`` from the white references, and predictions
+for a measurement at time ``t`` are multiplied by it.
+
+Grey rows (``r = g = b``), where a session has them, add per-channel output
+points: each grey's black-subtracted XYZ is solved for the three channel
+outputs through the full-drive primaries (divided by the interaction gain when
+that term is on).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from workbench.diagnostics.detectors import DiagnosisContext, tone_data
+from workbench.diagnostics.evidence import ChannelSweep, xy_of
+from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
+from workbench.display.tone_curves import fit_tone_curve, select_tone_curve
+
+__all__ = ["TERMS", "fit_extended", "grey_channel_outputs"]
+
+TERMS = {
+    "temporal-drift": "drift correction from the white references",
+    "black-offset": "black/flare offset",
+    "tone-curve-shape": "flexible per-channel tone curves",
+    "chromaticity-shift": "level-dependent primaries",
+    "channel-interaction": "load-dependent channel interaction",
+}
+"""Effect id → the model term that answers it."""
+
+
+def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteraction | None = None):
+    """Per-channel (drive, output) points implied by the grey rows, or None."""
+    greys = context.fit.mask("grey") & (context.fit.rgb[:, 0] > 0)
+    if greys.sum() < 3:
+        return None
+    matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
+    target = context.fit.XYZ[greys] - context.black
+    outputs = np.linalg.solve(matrix, target.T).T
+    if interaction is not None:
+        for _ in range(20):
+            outputs = np.linalg.solve(matrix, (target / interaction.gain(
+                np.clip(outputs, 0, 1).mean(axis=1))[:, None]).T).T
+    drive = context.fit.rgb[greys, 0] / 255.0
+    return drive, outputs
+
+
+def _chromaticity_term(sweep: ChannelSweep, min_output: float = 0.02) -> ChromaticityDrift | None:
+    usable = (sweep.output >= min_output) & (sweep.drive < 1.0)
+    if usable.sum() < 3:
+        return None
+    delta = xy_of(sweep.XYZ[usable]) - sweep.full_xy
+    u = 1.0 - sweep.drive[usable]
+    weights = np.sqrt(sweep.output[usable])
+    coefficients, *_ = np.linalg.lstsq(np.column_stack([u, u ** 2]) * weights[:, None],
+                                       delta * weights[:, None], rcond=None)
+    return ChromaticityDrift(tuple(tuple(float(v) for v in row) for row in coefficients))
+
+
+def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
+    summed = sum(s.full_XYZ for s in context.sweeps)
+    white = context.white - context.black
+    ratio = float(white @ summed / (summed @ summed))
+    return ChannelInteraction(amount=1.0 - ratio)
+
+
+def fit_extended(context: DiagnosisContext, effects) -> ExtendedDisplay:
+    """The extended model with the terms for ``effects`` (ids of found effects)."""
+    effects = set(effects)
+    interaction = _interaction_term(context) if "channel-interaction" in effects else None
+    greys = grey_channel_outputs(context, interaction)
+    tone = []
+    for sweep in context.sweeps:
+        extra = None if greys is None else (greys[0], greys[1][:, sweep.channel])
+        drive, output = tone_data(sweep, extra)
+        if "tone-curve-shape" in effects:
+            curve, _ = select_tone_curve(drive, output, forms=("gog", "extended-power", "spline"))
+        else:
+            curve = fit_tone_curve(drive, output, "power")
+        tone.append(curve)
+    chromaticity = tuple(_chromaticity_term(s) if "chromaticity-shift" in effects else None
+                         for s in context.sweeps)
+    full = np.array([s.full_XYZ for s in context.sweeps])
+    return ExtendedDisplay(
+        black=context.black if "black-offset" in effects else np.zeros(3),
+        white=context.white,
+        primaries_xy=xy_of(full),
+        primaries_Y=full[:, 1],
+        tone=tuple(tone),
+        chromaticity=chromaticity,
+        interaction=interaction,
+        components=tuple(e for e in TERMS if e in effects),
+    )

@@ -1,0 +1,181 @@
+"""The extended display model: the paper's model plus the terms the diagnostics find.
+
+``XYZ = black + s(load) · Σ_c Y_c · L_c(d_c) · u(xy_c(d_c))``
+
+- ``black``: the XYZ emitted at DAC 0 (black/flare offset; the 3×4 form of the
+  matrix model when nothing else is on).
+- ``L_c``: per-channel tone curve (:mod:`workbench.display.tone_curves`).
+- ``xy_c(d)``: the primary's chromaticity at drive ``d``; constant (the
+  full-drive primary) unless level-dependent primaries are on, then
+  ``xy_full + a₁(1 − d) + a₂(1 − d)²`` per coordinate, fitted to the
+  black-subtracted sweep (Psychtoolbox's multiple primary bases do the same
+  job with spectra).
+- ``s(load) = 1 − a · clip((load − knee)/(1 − knee), 0, 1)``, ``load`` the mean of the
+  ``L_c``: channel interaction (OLED power limiting, or a supply that sags);
+  ``a < 0`` is super-additivity.
+- ``u(x, y) = (x/y, 1, (1 − x − y)/y)``, ``Y_c`` the full-drive luminance.
+
+The inverse iterates (fixed point on the per-channel luminances, 3×3 solve per
+step, vectorized) and clips per channel in ``L`` like every model here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from workbench.display.base import DisplayModel, as_dac, as_XYZ
+from workbench.display.tone_curves import ToneCurve, PowerCurve, tone_curve_from_parameters
+
+__all__ = ["ChromaticityDrift", "ChannelInteraction", "ExtendedDisplay", "xy_to_unit_XYZ"]
+
+
+def xy_to_unit_XYZ(xy: np.ndarray) -> np.ndarray:
+    """XYZ of unit luminance at chromaticity ``xy`` (..., 2)."""
+    x, y = xy[..., 0], xy[..., 1]
+    return np.stack([x / y, np.ones_like(x), (1.0 - x - y) / y], axis=-1)
+
+
+@dataclass(frozen=True)
+class ChromaticityDrift:
+    """``Δxy(d) = a₁ (1 − d) + a₂ (1 − d)²`` for one channel (coefficients (2, 2): [a₁, a₂] × [x, y])."""
+
+    coefficients: tuple[tuple[float, float], tuple[float, float]]
+
+    def delta(self, drive: np.ndarray) -> np.ndarray:
+        u = 1.0 - np.clip(drive, 0.0, 1.0)
+        a = np.asarray(self.coefficients)
+        return u[..., None] * a[0] + (u ** 2)[..., None] * a[1]
+
+
+@dataclass(frozen=True)
+class ChannelInteraction:
+    """Load-dependent gain ``s = 1 − amount · clip((load − knee)/(1 − knee), 0, 1)``."""
+
+    amount: float
+    knee: float = 1.0 / 3.0
+
+    def gain(self, load: np.ndarray) -> np.ndarray:
+        excess = np.clip((load - self.knee) / (1.0 - self.knee), 0.0, 1.0)
+        return 1.0 - self.amount * excess
+
+
+@dataclass(frozen=True, eq=False)
+class ExtendedDisplay(DisplayModel):
+    """The baseline plus found terms (module doc). ``components`` names what is on."""
+
+    black: np.ndarray
+    white: np.ndarray
+    primaries_xy: np.ndarray  # (3, 2) full-drive, black-subtracted
+    primaries_Y: np.ndarray  # (3,)
+    tone: tuple[ToneCurve, ToneCurve, ToneCurve]
+    chromaticity: tuple[ChromaticityDrift | None, ...] = (None, None, None)
+    interaction: ChannelInteraction | None = None
+    components: tuple[str, ...] = ()
+    iterations: int = field(default=40)
+
+    model_id = "extended"
+
+    def __post_init__(self):
+        for name in ("black", "white", "primaries_xy", "primaries_Y"):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+
+    @property
+    def white_XYZ(self):
+        return self.white
+
+    @property
+    def black_XYZ(self):
+        return self.black
+
+    def _xy(self, drive: np.ndarray) -> np.ndarray:
+        """Chromaticity (..., 3, 2) of each channel at its drive (..., 3)."""
+        xy = np.broadcast_to(self.primaries_xy, drive.shape + (2,)).copy()
+        for c, term in enumerate(self.chromaticity):
+            if term is not None:
+                xy[..., c, :] += term.delta(drive[..., c])
+        return xy
+
+    def _luminance_vectors(self, drive: np.ndarray) -> np.ndarray:
+        """(..., 3, 3): column c = XYZ per unit normalized output of channel c."""
+        unit = xy_to_unit_XYZ(self._xy(drive))  # (..., 3 channels, 3 XYZ)
+        return np.swapaxes(unit * self.primaries_Y[:, None], -1, -2)
+
+    def _tone(self, drive: np.ndarray) -> np.ndarray:
+        return np.stack([self.tone[c].forward(drive[..., c]) for c in range(3)], axis=-1)
+
+    def _tone_inverse(self, output: np.ndarray) -> np.ndarray:
+        return np.stack([self.tone[c].inverse(output[..., c]) for c in range(3)], axis=-1)
+
+    def _gain(self, output: np.ndarray) -> np.ndarray:
+        if self.interaction is None:
+            return np.ones(output.shape[:-1])
+        return self.interaction.gain(output.mean(axis=-1))
+
+    def forward(self, rgb) -> np.ndarray:
+        drive = as_dac(rgb) / 255.0
+        output = self._tone(drive)
+        vectors = self._luminance_vectors(drive)
+        contribution = np.einsum("...ij,...j->...i", vectors, output)
+        return self.black + self._gain(output)[..., None] * contribution
+
+    def linear_drive(self, XYZ) -> np.ndarray:
+        """Unclipped normalized channel outputs ``L`` that reproduce ``XYZ``."""
+        target = as_XYZ(XYZ) - self.black
+        drive = np.ones(target.shape[:-1] + (3,))
+        output = np.zeros_like(drive)
+        simple = self.interaction is None and all(t is None for t in self.chromaticity)
+        for _ in range(1 if simple else self.iterations):
+            vectors = self._luminance_vectors(drive)
+            gain = self._gain(np.clip(output, 0.0, 1.0))
+            new = np.linalg.solve(vectors, (target / gain[..., None])[..., None])[..., 0]
+            if np.allclose(new, output, rtol=0, atol=1e-10):
+                output = new
+                break
+            output = new
+            drive = self._tone_inverse(np.clip(output, 0.0, 1.0))
+        return output
+
+    def dac_from_drive(self, drive) -> np.ndarray:
+        return 255.0 * self._tone_inverse(np.asarray(drive, dtype=float))
+
+    def parameters(self) -> dict:
+        return {
+            "components": list(self.components),
+            "black_XYZ": self.black.tolist(),
+            "white_XYZ": self.white.tolist(),
+            "primaries_xy": self.primaries_xy.tolist(),
+            "primaries_Y": self.primaries_Y.tolist(),
+            "tone": [curve.to_json() for curve in self.tone],
+            "chromaticity": [None if t is None else [list(r) for r in t.coefficients]
+                             for t in self.chromaticity],
+            "interaction": None if self.interaction is None else {
+                "amount": self.interaction.amount, "knee": self.interaction.knee},
+        }
+
+    @classmethod
+    def from_parameters(cls, parameters: dict) -> "ExtendedDisplay":
+        interaction = parameters.get("interaction")
+        return cls(
+            black=parameters["black_XYZ"], white=parameters["white_XYZ"],
+            primaries_xy=parameters["primaries_xy"], primaries_Y=parameters["primaries_Y"],
+            tone=tuple(tone_curve_from_parameters(t) for t in parameters["tone"]),
+            chromaticity=tuple(None if t is None else ChromaticityDrift(
+                tuple(tuple(r) for r in t)) for t in parameters["chromaticity"]),
+            interaction=None if interaction is None else ChannelInteraction(**interaction),
+            components=tuple(parameters.get("components", ())),
+        )
+
+    def describe(self) -> str:
+        forms = "/".join(curve.form for curve in self.tone)
+        extra = ", ".join(self.components) or "no extensions"
+        return f"extended ({extra}; tone {forms})"
+
+    @classmethod
+    def from_gamma_matrix(cls, model) -> "ExtendedDisplay":
+        """The paper's model expressed in this form (no extensions)."""
+        Y = model.matrix[1]
+        xy = (model.matrix[:2] / model.matrix.sum(axis=0)).T
+        return cls(black=np.zeros(3), white=model.white_XYZ, primaries_xy=xy, primaries_Y=Y,
+                   tone=tuple(PowerCurve(float(g)) for g in model.gamma))
