@@ -12,6 +12,8 @@
   spectra at ``rawdata.rawGammaInput`` levels (ambient-subtracted, so the
   ambient ``P_ambient`` is added back and reported as the black), wavelengths
   from ``describe.S``; ramps only, no white and no mixtures;
+- a gamma-matrix profile (``.vrprofile.json``): its published black, white
+  and full-drive primaries (what a paper's characterization table gives);
 - a measurement directory (``session.csv`` inside it).
 
 XYZ are absolute (cd/m²) where the file says so (``.ti3``); Psychtoolbox
@@ -32,7 +34,8 @@ import numpy as np
 from workbench.errors import SpectrumFileError
 from workbench.session import Session, read_session_csv
 
-__all__ = ["SESSION_READERS", "read_session", "read_ti3", "read_psychtoolbox_mat"]
+__all__ = ["SESSION_READERS", "read_session", "read_ti3", "read_psychtoolbox_mat",
+           "read_profile_primaries"]
 
 
 def _ti3_kind(rgb: np.ndarray) -> str:
@@ -161,6 +164,28 @@ def read_psychtoolbox_mat(path) -> Session:
                                                "monitor": str(getattr(cal.describe, "monitor", ""))})
 
 
+def read_profile_primaries(path) -> Session:
+    """A gamma-matrix profile's published numbers as a session: black, white, R, G, B at full drive.
+
+    This is what a paper's characterization table gives (e.g. Table 1 of
+    Díaz-Barrancas et al. 2020); the profile's gammas travel in the metadata
+    as the baseline, since there are no sweeps to fit them on.
+    """
+    from workbench.profile import load_profile
+
+    profile = load_profile(path)
+    if profile.display_model_type != "gamma-matrix":
+        raise SpectrumFileError(path, None, f"a {profile.display_model_type!r} profile has no "
+                                "published primaries to diagnose",
+                                "diagnose the session the profile was made from instead")
+    model = profile.display_model()
+    rgb = [[0, 0, 0], [255, 255, 255], [255, 0, 0], [0, 255, 0], [0, 0, 255]]
+    XYZ = [model.black_XYZ, model.white_XYZ, *model.matrix.T]
+    return Session(kind=np.array(["black", "white", "ramp-r", "ramp-g", "ramp-b"], dtype=object),
+                   rgb=np.array(rgb, dtype=float), XYZ=np.array(XYZ), source=str(path),
+                   metadata={"format": "profile", "baseline_parameters": model.parameters()})
+
+
 def _read_directory(path: Path) -> Session:
     candidate = path / "session.csv"
     if not candidate.is_file():
@@ -174,6 +199,7 @@ SESSION_READERS = {
     ".csv": read_session_csv,
     ".ti3": read_ti3,
     ".mat": read_psychtoolbox_mat,
+    ".json": read_profile_primaries,
 }
 
 

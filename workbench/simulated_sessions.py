@@ -33,6 +33,19 @@ _RELATIVE_NOISE = 0.002  # per wavelength, as the emulator's default
 _NOISE_FLOOR = 2e-8  # W·sr⁻¹·m⁻²·nm⁻¹, as the emulator's default (1° field)
 
 
+_TIMING = {}
+
+
+def _measurement_s(radiance: np.ndarray) -> float:
+    """The emulator's modelled time for a radiance, memoized (plans repeat their patches)."""
+    key = radiance.tobytes()
+    if key not in _TIMING:
+        if "model" not in _TIMING:
+            _TIMING["model"] = InstrumentTimingModel()
+        _TIMING[key] = _TIMING["model"].measurement_s(radiance)
+    return _TIMING[key]
+
+
 def random_effect_magnitude(effect: str, rng: np.random.Generator) -> float:
     """A magnitude drawn uniformly from the headset effect's realistic range."""
     from instruments.headset import HEADSET_EFFECTS
@@ -65,10 +78,9 @@ def simulate_session(effects: dict | None = None, seed: int = 0, *,
     rgb = np.array([patch.rgb for patch in plan.patches], dtype=float)
     kinds = np.array([patch.kind for patch in plan.patches], dtype=object)
     headset = SimulatedHeadset(effects, seed=unit_seed, white_luminance=white_luminance)
-    timing = InstrumentTimingModel()
     # the session clock: each patch is measured after the previous one ended
     clean = headset.radiance(rgb, 0.0)
-    durations = np.array([timing.measurement_s(spectrum) for spectrum in clean])
+    durations = np.array([_measurement_s(spectrum) for spectrum in clean])
     t_end = np.cumsum(durations)
     headset.session_length_s = float(t_end[-1])
     spectra = np.stack([headset.radiance(rgb[i], float(t_end[i])) for i in range(len(rgb))])

@@ -21,7 +21,7 @@ import numpy as np
 from workbench.diagnostics.detectors import DiagnosisContext, tone_data
 from workbench.diagnostics.evidence import ChannelSweep, xy_of
 from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
-from workbench.display.tone_curves import fit_tone_curve, select_tone_curve
+from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_tone_curve
 
 __all__ = ["TERMS", "fit_extended", "grey_channel_outputs"]
 
@@ -70,8 +70,12 @@ def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
     return ChannelInteraction(amount=1.0 - ratio)
 
 
-def fit_extended(context: DiagnosisContext, effects) -> ExtendedDisplay:
-    """The extended model with the terms for ``effects`` (ids of found effects)."""
+def fit_extended(context: DiagnosisContext, effects, baseline=None) -> ExtendedDisplay:
+    """The extended model with the terms for ``effects`` (ids of found effects).
+
+    Where a channel has fewer than three sweep points (published primaries
+    only), its tone curve is the ``baseline``'s power law.
+    """
     effects = set(effects)
     interaction = _interaction_term(context) if "channel-interaction" in effects else None
     greys = grey_channel_outputs(context, interaction)
@@ -79,7 +83,9 @@ def fit_extended(context: DiagnosisContext, effects) -> ExtendedDisplay:
     for sweep in context.sweeps:
         extra = None if greys is None else (greys[0], greys[1][:, sweep.channel])
         drive, output = tone_data(sweep, extra)
-        if "tone-curve-shape" in effects:
+        if drive.size < 3 and baseline is not None:
+            curve = PowerCurve(float(baseline.gamma[sweep.channel]))
+        elif "tone-curve-shape" in effects:
             curve, _ = select_tone_curve(drive, output, forms=("gog", "extended-power", "spline"))
         else:
             curve = fit_tone_curve(drive, output, "power")

@@ -101,10 +101,13 @@ def diagnose(session: Session) -> Diagnosis:
         raise InputError(f"session {session.source!r} is empty")
     fit_session = session.without("validation")
     validation = session.select("validation")
-    baseline = GammaMatrixDisplay.fit(fit_session)
+    if "baseline_parameters" in session.metadata:  # published numbers: nothing to fit on
+        baseline = GammaMatrixDisplay.from_parameters(session.metadata["baseline_parameters"])
+    else:
+        baseline = GammaMatrixDisplay.fit(fit_session)
     context, results = run_detectors(fit_session)
     found = [r.effect for r in results if r.found]
-    extended = fit_extended(context, found) if found else baseline
+    extended = fit_extended(context, found, baseline) if found else baseline
     white = context.white if not session.mask("white").any() else session.white_XYZ
     if len(validation):
         baseline_dE = delta_E2000(baseline.forward(validation.rgb), validation.XYZ, white)

@@ -8,6 +8,7 @@ from a profile. The diagnostics add their extensions to this registry.
 from __future__ import annotations
 
 from workbench.display.base import DisplayModel, as_dac, as_XYZ, quantize_dac
+from workbench.display.extended import ExtendedDisplay
 from workbench.display.gamma_matrix import GammaMatrixDisplay, fit_power_law
 from workbench.display.srgb import SRGBDisplay, srgb_decode, srgb_encode
 from workbench.errors import InputError
@@ -15,6 +16,7 @@ from workbench.errors import InputError
 __all__ = [
     "DISPLAY_MODELS",
     "DisplayModel",
+    "ExtendedDisplay",
     "GammaMatrixDisplay",
     "SRGBDisplay",
     "as_dac",
@@ -30,6 +32,7 @@ __all__ = [
 DISPLAY_MODELS: dict[str, type[DisplayModel]] = {
     GammaMatrixDisplay.model_id: GammaMatrixDisplay,
     SRGBDisplay.model_id: SRGBDisplay,
+    ExtendedDisplay.model_id: ExtendedDisplay,
 }
 
 

@@ -1,0 +1,141 @@
+"""Diagnostics: hidden effects must be found, named first and extended for a held-out gain.
+
+Each effect is hidden in sessions of the simulated headset (the paper plan,
+instrument noise) with a seeded random magnitude drawn from its realistic
+range; clean sessions must give no finding.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from workbench.diagnostics import DETECTORS, diagnose
+from workbench.session_readers import read_session
+from workbench.simulated_sessions import random_effect_magnitude, simulate_session
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+EFFECTS = ("black-offset", "channel-interaction", "chromaticity-shift", "tone-curve-shape",
+           "temporal-drift")
+
+
+def test_every_vocabulary_effect_has_a_detector():
+    assert set(EFFECTS) <= set(DETECTORS)
+
+
+@pytest.mark.parametrize("effect", EFFECTS)
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_hidden_effect_is_named_first_with_a_heldout_gain(effect, seed):
+    rng = np.random.default_rng([seed, EFFECTS.index(effect)])
+    magnitude = random_effect_magnitude(effect, rng)
+    diagnosis = diagnose(simulate_session({effect: magnitude}, seed=seed))
+    names = [f.effect for f in diagnosis.findings]
+    assert names and names[0] == effect, (magnitude, names)
+    assert diagnosis.gain_pct >= 30, (magnitude, diagnosis.gain_pct)
+    assert diagnosis.protocol == "holdout"
+
+
+@pytest.mark.slow
+def test_clean_sessions_give_no_finding_in_38_of_40():
+    clean = sum(not diagnose(simulate_session(None, seed=seed)).findings for seed in range(40))
+    assert clean >= 38
+
+
+def test_two_effects_are_both_named():
+    rng = np.random.default_rng(7)
+    effects = {"black-offset": random_effect_magnitude("black-offset", rng),
+               "temporal-drift": random_effect_magnitude("temporal-drift", rng)}
+    diagnosis = diagnose(simulate_session(effects, seed=21))
+    assert set(effects) <= {f.effect for f in diagnosis.findings}
+    assert diagnosis.gain_pct >= 30
+
+
+def test_clean_session_extended_is_the_baseline():
+    diagnosis = diagnose(simulate_session(None, seed=3))
+    assert diagnosis.findings == ()
+    assert diagnosis.extended is diagnosis.baseline
+    assert diagnosis.baseline_score.mean_dE00 < 0.2
+
+
+@pytest.mark.parametrize("name", ["dell-up2516d-displaycal.ti3", "monitor-displaycal.ti3"])
+def test_real_lcd_ti3_files(name):
+    diagnosis = diagnose(read_session(REAL / name))
+    found = {f.effect for f in diagnosis.findings}
+    # well-behaved LCDs: a small black level and ~1 % non-additivity
+    assert {"black-offset", "channel-interaction"} <= found
+    assert "temporal-drift" not in found
+    assert diagnosis.extended_score.n == 108
+    assert diagnosis.extended_score.mean_dE00 <= 0.7
+    assert diagnosis.extended_score.mean_dE00 < diagnosis.baseline_score.mean_dE00
+
+
+def test_real_psychtoolbox_oled_ramps():
+    session = read_session(REAL / "sony-og-ptb-cal.mat")
+    assert session.spectra.shape == (25, 81)
+    diagnosis = diagnose(session)
+    found = {f.effect for f in diagnosis.findings}
+    assert {"black-offset", "tone-curve-shape"} <= found
+    assert diagnosis.baseline_score is None  # ramps only: nothing held out
+
+
+def test_paper_table1_names_channel_interaction_from_its_numbers_alone():
+    from profiles import example_profile_path
+
+    diagnosis = diagnose(read_session(example_profile_path("htc-vive-paper")))
+    assert diagnosis.findings[0].effect == "channel-interaction"
+    assert "88.7 %" in diagnosis.findings[0].evidence  # (100 − 0.4) / (113.5 − 3 × 0.4)
+
+
+def test_extended_model_round_trips(tmp_path):
+    from workbench.display import ExtendedDisplay, display_model_from_parameters
+
+    effects = {"black-offset": 0.008, "chromaticity-shift": 0.03, "channel-interaction": 0.1,
+               "tone-curve-shape": 0.05}
+    model = diagnose(simulate_session(effects, seed=4)).extended
+    assert isinstance(model, ExtendedDisplay)
+    rng = np.random.default_rng(0)
+    dac = rng.uniform(20, 255, (2000, 3))
+    back = model.inverse(model.forward(dac))
+    assert np.abs(back - dac).max() < 0.5
+    again = display_model_from_parameters("extended", json.loads(json.dumps(model.parameters())))
+    np.testing.assert_allclose(again.forward(dac), model.forward(dac))
+
+
+def test_diagnose_cli_json_export_and_predict(tmp_path):
+    from workbench.session import write_session_csv
+
+    session_path = write_session_csv(simulate_session({"black-offset": 0.008}, seed=5),
+                                     tmp_path / "session.csv")
+    profile = tmp_path / "out.vrprofile.json"
+    result = subprocess.run([sys.executable, "-m", "workbench", "diagnose", str(session_path),
+                             "--json", "--export", str(profile)],
+                            capture_output=True, text=True, check=True, timeout=300)
+    document = json.loads(result.stdout)
+    assert set(document) >= {"baseline", "findings", "extended", "gain"}
+    assert document["findings"][0]["effect"] == "black-offset"
+    assert set(document["findings"][0]) >= {"effect", "evidence", "score"}
+    assert set(document["extended"]["validation"]) >= {"mean_dE00", "p95_dE00", "max_dE00"}
+    assert document["extended"]["protocol"] == "holdout"
+    assert document["gain"]["mean_dE00_reduction_pct"] > 30
+    predicted = subprocess.run([sys.executable, "-m", "workbench", "predict", str(profile)],
+                               input="r,g,b\n0,0,0\n255,255,255\n", capture_output=True,
+                               text=True, check=True, timeout=120)
+    lines = predicted.stdout.strip().splitlines()
+    assert lines[0] == "X,Y,Z" and len(lines) == 3
+    black_Y = float(lines[1].split(",")[1])
+    assert black_Y > 0.5  # the extended model has the black term: 0.8 % of ~100 cd/m²
+
+
+def test_report_is_self_contained_html(tmp_path):
+    from workbench.diagnostics.report import write_report
+
+    diagnosis = diagnose(simulate_session({"tone-curve-shape": 0.06, "temporal-drift": 0.05},
+                                          seed=9))
+    path = write_report(diagnosis, tmp_path / "report.html")
+    text = path.read_text()
+    assert text.count("data:image/png;base64,") == 5
+    assert "tone-curve-shape" in text and "temporal-drift" in text
+    assert "http://" not in text and "https://" not in text  # nothing fetched when opened

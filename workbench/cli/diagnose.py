@@ -1,0 +1,126 @@
+"""``diagnose`` and ``predict``: what the display model gets wrong, and the model in use."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from workbench.errors import InputError
+
+__all__ = ["register", "export_profile"]
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "diagnose", help="find what the paper's display model gets wrong, extend it, measure the gain",
+        description="Diagnose a session (session CSV, Argyll .ti3, Psychtoolbox .mat, or a "
+                    "measurement directory): name the physical effects the gamma + 3x3 model "
+                    "misses, fit the extended model, and score both on the validation colours.")
+    parser.add_argument("session", help="session CSV, .ti3, .mat or measurement directory")
+    parser.add_argument("--json", action="store_true", help="machine-readable output (design §5)")
+    parser.add_argument("--export", metavar="PROFILE",
+                        help="write the extended model's profile (the baseline's if nothing was found)")
+    parser.add_argument("--report", metavar="FILE.html", help="write a self-contained HTML report")
+    parser.set_defaults(handler=_diagnose)
+
+    predict = subparsers.add_parser(
+        "predict", help="XYZ a profile predicts for DAC values (CSV r,g,b on stdin)",
+        description="Read CSV r,g,b (0..255, optional header) on standard input; write CSV "
+                    "X,Y,Z on standard output, as the profile's display model predicts.")
+    predict.add_argument("profile", help="a .vrprofile.json")
+    predict.set_defaults(handler=_predict)
+
+
+def export_profile(diagnosis, path) -> Path:
+    from workbench.illuminants import PAPER_SOURCES
+    from workbench.profile import Profile, save_profile
+
+    score = diagnosis.extended_score
+    profile = Profile.from_display_model(
+        diagnosis.extended,
+        device={"name": Path(diagnosis.session.source).stem or "display",
+                "source": diagnosis.session.source},
+        validation=None if score is None else {**score.to_json(), "protocol": diagnosis.protocol},
+        diagnosis={"findings": [{"effect": f.effect, "evidence": f.evidence, "score": f.score}
+                                for f in diagnosis.findings]},
+    ).with_lights(PAPER_SOURCES)
+    return save_profile(profile, path)
+
+
+def _print_text(diagnosis) -> None:
+    result = diagnosis.to_json()
+    base, ext = result["baseline"], result["extended"]
+    print(f"session {result['session']['source']}: {result['session']['measurements']} "
+          f"measurements, {result['session']['validation']} held out for validation")
+
+    def figures(block):
+        v = block["validation"]
+        return ("no validation colours" if v is None else
+                f"ΔE00 mean {v['mean_dE00']:.2f}, p95 {v['p95_dE00']:.2f}, max {v['max_dE00']:.2f}")
+
+    print(f"baseline  {base['model']}: {figures(base)}")
+    if not result["findings"]:
+        print("findings  none beyond noise: the paper's model is adequate for this display")
+    for i, finding in enumerate(result["findings"], start=1):
+        print(f"finding {i} {finding['effect']} (score {finding['score']:.1f}): {finding['evidence']}")
+    print(f"extended  {ext['model']}: {figures(ext)}  [{ext['protocol']}]")
+    gain = result["gain"]["mean_dE00_reduction_pct"]
+    if gain is not None:
+        print(f"gain      mean ΔE00 reduced by {gain:.0f} % on colours neither model was fitted on")
+    print("(CIEDE2000 in CIELAB whose white is the measured display white)")
+
+
+def _diagnose(args) -> int:
+    from workbench.diagnostics import diagnose
+    from workbench.session_readers import read_session
+
+    diagnosis = diagnose(read_session(args.session))
+    if args.json:
+        json.dump(diagnosis.to_json(), sys.stdout, indent=1)
+        print()
+    else:
+        _print_text(diagnosis)
+    if args.export:
+        path = export_profile(diagnosis, args.export)
+        print(f"wrote profile {path}", file=sys.stderr)
+    if args.report:
+        from workbench.diagnostics.report import write_report
+
+        path = write_report(diagnosis, args.report)
+        print(f"wrote report {path}", file=sys.stderr)
+    return 0
+
+
+def _predict(args) -> int:
+    from workbench.profile import load_profile
+
+    model = load_profile(args.profile).display_model()
+    rows = []
+    for number, row in enumerate(csv.reader(io.StringIO(sys.stdin.read())), start=1):
+        cells = [cell.strip() for cell in row]
+        if not cells or not any(cells):
+            continue
+        try:
+            values = [float(v) for v in cells[:3]]
+        except ValueError:
+            if number == 1:
+                continue  # header
+            raise InputError(f"stdin line {number}: {row!r} is not r,g,b numbers; "
+                             "give one DAC triplet (0..255) per line") from None
+        if len(values) != 3:
+            raise InputError(f"stdin line {number}: need 3 values r,g,b, got {len(values)}")
+        rows.append(values)
+    if not rows:
+        raise InputError("no r,g,b rows on standard input; e.g. echo 255,128,0 | "
+                         "python -m workbench predict PROFILE")
+    XYZ = model.forward(np.array(rows))
+    writer = csv.writer(sys.stdout, lineterminator="\n")
+    writer.writerow(["X", "Y", "Z"])
+    for value in XYZ:
+        writer.writerow([f"{v:.6g}" for v in value])
+    return 0
