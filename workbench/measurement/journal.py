@@ -281,10 +281,9 @@ class Journal:
         """Patches whose latest attempt failed, in plan order."""
         return [r for _, r in sorted(self.latest().items()) if not r.ok]
 
-    def pending_indices(self) -> list:
-        """Plan indices still to measure: no record yet, or the latest attempt failed."""
-        latest = self.latest()
-        return [i for i in range(len(self.header.plan)) if i not in latest or not latest[i].ok]
+    def session_end_s(self) -> float:
+        """Session time at which the last journaled patch ended (0 for none)."""
+        return max((r.t_s + r.duration_s for r in self.records), default=0.0)
 
 
 def read_journal(path: str | os.PathLike) -> Journal:

@@ -76,13 +76,17 @@ __all__ = [
     "RunSummary",
     "RunFinished",
     "MeasurementRun",
+    "format_duration",
 ]
 
 _LOG = logging.getLogger(__name__)
 
 JOURNAL_NAME = "journal.jsonl"
+"""File name of the journal in the output directory."""
 SESSION_CSV_NAME = "session.csv"
+"""File name of the exported session CSV."""
 SESSION_TI3_NAME = "session.ti3"
+"""File name of the exported Argyll ``.ti3``."""
 
 _PAUSE_POLL_S = 0.1  # how often a paused run looks at its cancel flag
 
@@ -214,7 +218,7 @@ class RunSummary:
 
     def one_line(self, session_label: str = "session") -> str:
         """E.g. ``finished: 214 of 214 patches measured, 0 failed; session 2 h 13 min, wall 12.3 s``."""
-        failed = "; ".join(f"#{r.index} {r.patch().describe()}: {r.reason}" for r in self.failed)
+        failed = "; ".join(f"{_where(r.index, r.patch(), self.planned)}: {r.reason}" for r in self.failed)
         return (
             f"{self.status}: {self.measured} of {self.planned} patches measured, "
             f"{len(self.failed)} failed{' (' + failed + ')' if failed else ''}; "
@@ -236,6 +240,11 @@ def format_duration(seconds: float) -> str:
     if seconds >= 60:
         return f"{int(seconds // 60)} min {int(seconds % 60):02d} s"
     return f"{seconds:.1f} s"
+
+
+def _where(index: int, patch: Patch, total: int) -> str:
+    """How messages name a patch: ``patch 5 of 28 (ramp-r (153, 0, 0), journal index 4)``."""
+    return f"patch {index + 1} of {total} ({patch.describe()}, journal index {index})"
 
 
 def _finite_or_none(values) -> list | None:
@@ -292,7 +301,7 @@ class MeasurementRun:
 
     @classmethod
     def start(cls, out_dir, plan: MeasurementPlan, display, meter: Meter, *,
-              display_name: str = "", settings: dict | None = None,
+              display_name: str | None = None, settings: dict | None = None,
               clock: Callable[[JournalHeader, Journal | None], SessionClock] | None = None,
               **options) -> "MeasurementRun":
         """A new session: identify the instrument and write the journal header.
@@ -304,8 +313,8 @@ class MeasurementRun:
         plan : MeasurementPlan
         display : PatchDisplay
         meter : Meter
-        display_name : str
-            What showed the patches, for the journal header.
+        display_name : str, optional
+            What showed the patches, for the journal header; ``display.describe()`` by default.
         settings : dict, optional
             Extra settings to keep in the header (effects, time scale, …).
         clock : callable, optional
@@ -315,7 +324,8 @@ class MeasurementRun:
             ``on_countdown``, ``settle_s``, ``max_consecutive_failures``.
         """
         out_dir = Path(out_dir)
-        header = JournalHeader(plan=plan, instrument=_identity(meter), display=display_name,
+        header = JournalHeader(plan=plan, instrument=_identity(meter),
+                               display=display.describe() if display_name is None else display_name,
                                settings=dict(settings or {}))
         writer = JournalWriter.create(out_dir / JOURNAL_NAME, header)
         make_clock = clock or (lambda h, j: WallSessionClock(h.started_epoch_s))
@@ -431,8 +441,8 @@ class MeasurementRun:
                 yield PatchMeasured(record, self._done(), total, self._eta(pending[position + 1:]))
                 if consecutive_failures >= self.max_consecutive_failures:
                     raise RunAborted(
-                        f"{consecutive_failures} patches failed in a row, the last #{index} "
-                        f"{patch.describe()}: {record.reason}. The journal in {self.out_dir} keeps every "
+                        f"{consecutive_failures} patches failed in a row, the last {_where(index, patch, total)}: "
+                        f"{record.reason}. The journal in {self.out_dir} keeps every "
                         "measurement; check the instrument, then run again with --resume "
                         "(failed patches are measured again)",
                         index, patch,
@@ -450,7 +460,7 @@ class MeasurementRun:
     def _measure_patch(self, index: int, patch: Patch) -> tuple[JournalRecord, float] | None:
         """Show and measure one patch: the record to journal and the wall seconds it
         took, or ``None`` if cancelled."""
-        where = f"patch #{index} of {len(self.plan)} ({patch.describe()})"
+        where = _where(index, patch, len(self.plan))
         resume_hint = (f"The journal in {self.out_dir} keeps every measurement before it; "
                        "fix the cause and run the same command with --resume")
         wall_start = time.monotonic()

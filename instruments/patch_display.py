@@ -1,0 +1,351 @@
+"""Patch displays: where the measurement sequence puts its colour patches.
+
+A patch display shows one full-field patch of 8-bit DAC values at a time
+(:class:`PatchDisplay`). Three are here: the simulated headset
+(:class:`SimulatedPatchDisplay`), a VR application reached over TCP
+(:class:`TcpPatchDisplay`), and a mirror that shows each patch on several
+displays (:class:`MirroredPatchDisplay`). The full-screen Qt window lives in
+``workbench.gui``.
+
+The patch protocol (``vr-workbench-patch/1``)
+---------------------------------------------
+A VR application implements this small protocol so that the workbench can show
+calibration patches in the headset. :mod:`instruments.patch_server` is a
+complete reference server to read as a model.
+
+Transport
+    TCP. The VR application is the **server** and listens on loopback
+    (``127.0.0.1``) unless told otherwise; the workbench is the **client**.
+Framing
+    One JSON object per line, UTF-8, ended by ``\\n`` (``\\r\\n`` accepted), at
+    most :data:`MAX_LINE_BYTES` bytes. Every request carries an integer ``id``;
+    the server answers every request with exactly one reply carrying the same
+    ``id``, in order.
+Requests and replies
+    ``{"cmd": "hello", "id": 1, "protocol": "vr-workbench-patch/1", "client": "vr-workbench 0.1.0"}``
+        → ``{"ok": true, "id": 1, "protocol": "vr-workbench-patch/1", "display": "<what shows the patches>"}``.
+        The client sends it first; a server that speaks another version answers
+        ``ok: false``.
+    ``{"cmd": "show", "id": 2, "rgb": [255, 128, 0]}``
+        → ``{"ok": true, "id": 2}`` **once a frame showing the patch has been
+        presented**: the whole field of view of both eyes, these exact integer
+        values 0..255 written to the frame buffer (no tone mapping, no
+        post-processing, no sRGB encoding by the engine, no dithering).
+    ``{"cmd": "bye", "id": 3}``
+        → ``{"ok": true, "id": 3}``; then the server closes the connection (and
+        may go back to its own picture).
+Errors
+    ``{"ok": false, "id": N, "error": "<what was wrong>"}`` for an unknown
+    ``cmd``, a malformed ``rgb``, or a patch that could not be shown; a line
+    that is not JSON gets ``"id": null``. The connection stays open.
+Timeouts
+    The client waits at most ``timeout_s`` to connect and for each reply, then
+    reports which request went unanswered; the server drops a client that has
+    been silent for its idle timeout.
+
+Examples
+--------
+A session as it appears on the wire (``>`` client, ``<`` server)::
+
+    > {"cmd": "hello", "id": 1, "protocol": "vr-workbench-patch/1", "client": "vr-workbench 0.1.0"}
+    < {"ok": true, "id": 1, "protocol": "vr-workbench-patch/1", "display": "Unity 2022.3 on HTC Vive"}
+    > {"cmd": "show", "id": 2, "rgb": [0, 0, 0]}
+    < {"ok": true, "id": 2}
+    > {"cmd": "bye", "id": 3}
+    < {"ok": true, "id": 3}
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import socket
+import time
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = [
+    "PATCH_PROTOCOL",
+    "MAX_LINE_BYTES",
+    "PatchDisplay",
+    "PatchDisplayError",
+    "SimulatedPatchDisplay",
+    "MirroredPatchDisplay",
+    "TcpPatchDisplay",
+    "validate_patch_rgb",
+    "encode_message",
+    "LineReader",
+]
+
+_LOG = logging.getLogger(__name__)
+
+PATCH_PROTOCOL = "vr-workbench-patch/1"
+"""Name and version of the line-based JSON patch protocol."""
+
+MAX_LINE_BYTES = 4096
+"""Longest line either side may send, terminator included."""
+
+
+class PatchDisplayError(RuntimeError):
+    """A patch could not be shown; the message names the display, the request and the fix."""
+
+
+@runtime_checkable
+class PatchDisplay(Protocol):
+    """Something that shows one full-field patch of DAC values at a time, and names itself."""
+
+    def show(self, rgb_dac) -> None:
+        """Show the patch ``rgb_dac`` (three integers 0..255); return once it is on screen."""
+
+    def close(self) -> None:
+        """Release the display (idempotent)."""
+
+    def describe(self) -> str:
+        """One line naming what shows the patches, for the journal header."""
+
+
+def validate_patch_rgb(rgb_dac) -> list[int]:
+    """Return ``rgb_dac`` as three ints 0..255, or raise ``ValueError`` naming the bad value."""
+    values = np.asarray(rgb_dac)
+    if values.shape != (3,):
+        raise ValueError(f"patch rgb {rgb_dac!r} must be three DAC values [r, g, b]")
+    try:
+        as_float = values.astype(float)
+    except (TypeError, ValueError):
+        raise ValueError(f"patch rgb {rgb_dac!r} must be numbers 0..255") from None
+    if not np.all(np.isfinite(as_float)) or np.any(as_float != np.round(as_float)) \
+            or np.any((as_float < 0) | (as_float > 255)):
+        raise ValueError(f"patch rgb {rgb_dac!r} must be integers 0..255 (8-bit DAC values)")
+    return [int(v) for v in as_float]
+
+
+def encode_message(message: dict) -> bytes:
+    """One protocol line: JSON, UTF-8, ``\\n``-terminated."""
+    line = json.dumps(message, separators=(", ", ": ")).encode("utf-8") + b"\n"
+    if len(line) > MAX_LINE_BYTES:
+        raise ValueError(f"message of {len(line)} bytes exceeds the protocol's {MAX_LINE_BYTES}-byte line limit")
+    return line
+
+
+class LineReader:
+    """Reads ``\\n``-terminated lines from a socket, each with a deadline.
+
+    Parameters
+    ----------
+    sock : socket.socket
+        A connected socket; its timeout is changed by :meth:`readline`.
+    """
+
+    def __init__(self, sock: socket.socket):
+        self._sock = sock
+        self._buffer = bytearray()
+
+    def readline(self, timeout_s: float) -> bytes | None:
+        """The next line without its terminator, or ``None`` once the peer has closed.
+
+        Raises
+        ------
+        TimeoutError
+            If no complete line arrives within ``timeout_s`` seconds.
+        ValueError
+            If a line exceeds :data:`MAX_LINE_BYTES`.
+        """
+        deadline = time.monotonic() + timeout_s
+        while b"\n" not in self._buffer:
+            if len(self._buffer) > MAX_LINE_BYTES:
+                raise ValueError(f"line longer than {MAX_LINE_BYTES} bytes")
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise TimeoutError(f"no complete line within {timeout_s:g} s")
+            self._sock.settimeout(remaining)
+            try:
+                chunk = self._sock.recv(MAX_LINE_BYTES)
+            except socket.timeout:
+                raise TimeoutError(f"no complete line within {timeout_s:g} s") from None
+            if not chunk:
+                return None
+            self._buffer += chunk
+        line, _, rest = bytes(self._buffer).partition(b"\n")
+        self._buffer = bytearray(rest)
+        return line.rstrip(b"\r")
+
+
+class SimulatedPatchDisplay:
+    """Shows patches on a :class:`instruments.headset.SimulatedHeadset` (instantly).
+
+    Parameters
+    ----------
+    headset : SimulatedHeadset
+        Anything with ``show(rgb_dac)`` and ``describe()``.
+    """
+
+    def __init__(self, headset):
+        self.headset = headset
+
+    def show(self, rgb_dac) -> None:
+        """Put ``rgb_dac`` on the simulated headset (at once)."""
+        self.headset.show(validate_patch_rgb(rgb_dac))
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+    def describe(self) -> str:
+        """One line naming the display, for journals."""
+        return self.headset.describe()
+
+
+class MirroredPatchDisplay:
+    """Shows every patch on several displays, in order (e.g. a VR app and the simulated headset).
+
+    Parameters
+    ----------
+    *displays : PatchDisplay
+    """
+
+    def __init__(self, *displays: PatchDisplay):
+        if not displays:
+            raise ValueError("MirroredPatchDisplay needs at least one display")
+        self.displays = displays
+
+    def show(self, rgb_dac) -> None:
+        """Show ``rgb_dac`` on each display in turn."""
+        for display in self.displays:
+            display.show(rgb_dac)
+
+    def close(self) -> None:
+        """Close every display."""
+        for display in self.displays:
+            display.close()
+
+    def describe(self) -> str:
+        """The displays' descriptions joined by ``+``."""
+        return " + ".join(display.describe() for display in self.displays)
+
+
+class TcpPatchDisplay:
+    """Client of the patch protocol: shows patches in a VR application over TCP.
+
+    Parameters
+    ----------
+    host : str
+        Where the VR application listens (normally loopback, ``127.0.0.1``).
+    port : int
+        Its TCP port.
+    timeout_s : float
+        Longest wait to connect and for each reply, in seconds.
+    client : str
+        How the client introduces itself in ``hello``.
+
+    Raises
+    ------
+    PatchDisplayError
+        If the application cannot be reached, does not answer ``hello`` in
+        time, or speaks another protocol version.
+
+    Examples
+    --------
+    >>> with TcpPatchDisplay("127.0.0.1", 47800) as display:  # doctest: +SKIP
+    ...     display.show([255, 255, 255])
+    """
+
+    def __init__(self, host: str, port: int, timeout_s: float = 5.0, *, client: str = "instruments"):
+        if not (timeout_s > 0):
+            raise ValueError(f"timeout_s {timeout_s!r} must be a positive number of seconds")
+        self.host, self.port, self.timeout_s = host, int(port), float(timeout_s)
+        self._next_id = 1
+        try:
+            self._sock = socket.create_connection((host, self.port), timeout=self.timeout_s)
+        except OSError as error:
+            raise PatchDisplayError(
+                f"cannot connect to the patch server at {self.where} ({error}); start the VR application's "
+                "patch server (or `python -m instruments.patch_server --port PORT`) and check host and port"
+            ) from error
+        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._reader = LineReader(self._sock)
+        self.display_name = ""
+        try:
+            reply = self._request({"cmd": "hello", "protocol": PATCH_PROTOCOL, "client": client})
+        except BaseException:
+            self._sock.close()
+            raise
+        if reply.get("protocol") != PATCH_PROTOCOL:
+            self._sock.close()
+            raise PatchDisplayError(
+                f"the patch server at {self.where} speaks {reply.get('protocol')!r}, not {PATCH_PROTOCOL!r}; "
+                "update the VR application's patch server"
+            )
+        self.display_name = str(reply.get("display", ""))
+
+    @property
+    def where(self) -> str:
+        """``tcp:HOST:PORT``, as ``--display`` spells it."""
+        return f"tcp:{self.host}:{self.port}"
+
+    def _request(self, message: dict) -> dict:
+        message = {**message, "id": self._next_id}
+        self._next_id += 1
+        _LOG.debug("patch %s > %s", self.where, message)
+        try:
+            self._sock.sendall(encode_message(message))
+            line = self._reader.readline(self.timeout_s)
+        except TimeoutError:
+            raise PatchDisplayError(
+                f"the patch server at {self.where} did not answer {message['cmd']!r} (id {message['id']}) "
+                f"within {self.timeout_s:g} s; check that the VR application is running and presenting frames"
+            ) from None
+        except (OSError, ValueError) as error:
+            raise PatchDisplayError(
+                f"the connection to the patch server at {self.where} failed during {message['cmd']!r} "
+                f"(id {message['id']}): {error}; restart the VR application and resume"
+            ) from error
+        if line is None:
+            raise PatchDisplayError(
+                f"the patch server at {self.where} closed the connection during {message['cmd']!r} "
+                f"(id {message['id']}); restart the VR application and resume"
+            )
+        _LOG.debug("patch %s < %s", self.where, line)
+        try:
+            reply = json.loads(line)
+        except json.JSONDecodeError:
+            raise PatchDisplayError(
+                f"the patch server at {self.where} answered {line[:80]!r}, which is not JSON; "
+                f"it must follow {PATCH_PROTOCOL} (see instruments.patch_display)"
+            ) from None
+        if not isinstance(reply, dict) or reply.get("id") != message["id"]:
+            raise PatchDisplayError(
+                f"the patch server at {self.where} answered {reply!r} to request id {message['id']}; "
+                f"replies must carry the request's id, in order ({PATCH_PROTOCOL})"
+            )
+        if reply.get("ok") is not True:
+            raise PatchDisplayError(
+                f"the patch server at {self.where} refused {message['cmd']!r} {message.get('rgb', '')}: "
+                f"{reply.get('error', 'no reason given')}"
+            )
+        return reply
+
+    def show(self, rgb_dac) -> None:
+        """Show ``rgb_dac`` and return once the server says the frame is presented."""
+        self._request({"cmd": "show", "rgb": validate_patch_rgb(rgb_dac)})
+
+    def close(self) -> None:
+        """Say ``bye`` (best effort) and close the connection."""
+        if self._sock is None:
+            return
+        try:
+            self._request({"cmd": "bye"})
+        except PatchDisplayError as error:
+            _LOG.info("patch server %s: %s", self.where, error)
+        finally:
+            self._sock.close()
+            self._sock = None
+
+    def describe(self) -> str:
+        """What the server says it shows the patches on, and where it is."""
+        return f"{self.display_name or 'VR application'} via {self.where}"
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

@@ -1,0 +1,231 @@
+"""``measure``: run a calibration sequence on a headset with a CS-2000 (or the simulation).
+
+::
+
+    vr-workbench measure (--simulate [--effect ID[:MAGNITUDE]]... [--time-scale S] | --port DEVICE)
+                         [--display simulated|tcp:HOST:PORT] [--plan paper|quick | --plan-file FILE]
+                         [--seed N] --out DIR [--resume]
+
+Writes ``DIR/journal.jsonl`` as it goes (one fsynced line per patch), then
+``DIR/session.csv`` and ``DIR/session.ti3``; shows a progress bar on stderr
+and ends with a one-line summary on stdout. Exit status: 0 when every patch
+was measured, 1 when some failed (they are named, and ``--resume`` measures
+them again), 2 for an error the user can fix (the message says how), 130 when
+cancelled with Ctrl-C.
+
+With ``--simulate`` the patches go to the simulated headset (Table 1 of the
+paper, plus the ``--effect`` given), the CS-2000 emulator measures it on a
+pseudo-terminal, and the real driver talks to that. The journal's times are
+then the instrument's modelled times; ``--time-scale`` only sets how long the
+emulator makes the run wait (0: not at all, 1: real timing). ``--seed`` seeds
+the validation colours and the instrument noise.
+"""
+
+from __future__ import annotations
+
+import secrets
+import signal
+import sys
+import threading
+from contextlib import ExitStack
+
+from tqdm import tqdm
+
+from instruments.cs2000 import CS2000, CS2000Error
+from instruments.headset import HEADSET_EFFECTS, HeadsetError, parse_effect
+from instruments.patch_display import (
+    MirroredPatchDisplay,
+    PatchDisplayError,
+    SimulatedPatchDisplay,
+    TcpPatchDisplay,
+)
+from workbench.errors import InputError, WorkbenchError
+from workbench.measurement.journal import read_journal
+from workbench.measurement.plans import MEASUREMENT_PLANS, measurement_plan, read_plan_file
+from workbench.measurement.runner import (
+    JOURNAL_NAME,
+    MeasurementRun,
+    PatchMeasured,
+    PatchStarted,
+    RunFinished,
+    RunPaused,
+    format_duration,
+)
+from workbench.measurement.simulation import open_simulated_instrument
+
+__all__ = ["register", "parse_display"]
+
+_DISPLAY_TIMEOUT_S = 10.0
+_INSTRUMENT_TIMEOUT_S = 10.0  # design §6: read timeout at least 10 s
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "measure", help="measure a calibration sequence (CS-2000 or simulation) into a journal",
+        description="Show each patch of a plan on the headset, measure it with the CS-2000, journal it "
+                    "(crash-safe; --resume continues), then write session.csv and session.ti3.")
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--simulate", action="store_true",
+                        help="measure the simulated headset with the CS-2000 emulator (on a pty)")
+    source.add_argument("--port", metavar="DEVICE", help="serial port of the CS-2000 (e.g. /dev/ttyACM0)")
+    parser.add_argument("--effect", action="append", default=[], metavar="ID[:MAGNITUDE]",
+                        help=f"with --simulate: a physical effect of the headset, repeatable; one of "
+                             f"{', '.join(HEADSET_EFFECTS)}")
+    parser.add_argument("--time-scale", type=float, default=0.0, metavar="S",
+                        help="with --simulate: fraction of real instrument timing to wait (default 0)")
+    parser.add_argument("--display", metavar="simulated|tcp:HOST:PORT",
+                        help="where patches are shown (default: simulated with --simulate)")
+    plans = parser.add_mutually_exclusive_group()
+    plans.add_argument("--plan", choices=sorted(MEASUREMENT_PLANS), help="built-in plan (default paper)")
+    plans.add_argument("--plan-file", metavar="FILE", help="CSV plan with columns kind,r,g,b")
+    parser.add_argument("--seed", type=int, help="seed of the validation colours and instrument noise "
+                                                 "(default: a fresh one, kept in the journal)")
+    parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the run journaled in DIR (failed patches are measured again)")
+    parser.set_defaults(handler=_run)
+
+
+def parse_display(text: str | None, simulate: bool) -> tuple[str, tuple]:
+    """``("simulated", ())`` or ``("tcp", (host, port))`` from ``--display``.
+
+    Raises
+    ------
+    InputError
+        For an unknown display or one that cannot work with the instrument chosen.
+    """
+    if text is None:
+        if simulate:
+            return "simulated", ()
+        raise InputError("--port needs --display tcp:HOST:PORT (the VR application's patch server)")
+    if text == "simulated":
+        if not simulate:
+            raise InputError("--display simulated needs --simulate: a real CS-2000 cannot measure the "
+                             "simulated headset; use --display tcp:HOST:PORT")
+        return "simulated", ()
+    kind, _, rest = text.partition(":")
+    host, _, port = rest.rpartition(":")
+    if kind == "tcp" and host and port.isdigit() and 0 < int(port) < 65536:
+        return "tcp", (host, int(port))
+    raise InputError(f"--display {text!r} is not understood; use simulated or tcp:HOST:PORT "
+                     "(e.g. tcp:127.0.0.1:47800)")
+
+
+def _effects(texts: list) -> dict:
+    try:
+        return dict(parse_effect(text) for text in texts)
+    except HeadsetError as error:
+        raise InputError(f"--effect: {error}") from None
+
+
+def _requested_plan(args):
+    """The plan asked for on the command line (``None`` if none was, on resume)."""
+    if args.plan_file:
+        return read_plan_file(args.plan_file)
+    if args.plan is None and args.seed is None and args.resume:
+        return None
+    seed = args.seed if args.seed is not None else secrets.randbelow(2**31)
+    return measurement_plan(args.plan or "paper", seed)
+
+
+def _run(args) -> int:
+    if not args.simulate and (args.effect or args.time_scale):
+        raise InputError("--effect and --time-scale apply to --simulate only")
+    if args.time_scale < 0:
+        raise InputError(f"--time-scale {args.time_scale} is negative; give 0 (no waiting) to 1 (real timing)")
+    display_kind, display_address = parse_display(args.display, args.simulate)
+    effects = _effects(args.effect)
+    plan = _requested_plan(args)
+    journal = read_journal(f"{args.out}/{JOURNAL_NAME}") if args.resume else None
+    settings = {"simulated": bool(args.simulate)}
+    if journal is not None:
+        _check_resume_settings(journal, args, effects)
+        settings = journal.header.settings
+        effects = settings.get("effects", effects) if args.simulate else effects
+    run_plan = plan if journal is None else journal.header.plan
+
+    with ExitStack() as stack:
+        simulation = None
+        if args.simulate:
+            simulation = stack.enter_context(open_simulated_instrument(
+                effects,
+                seed=run_plan.seed,
+                time_scale=args.time_scale,
+                clock_offset_s=0.0 if journal is None else journal.session_end_s(),
+                plan=run_plan,
+                session_length_s=settings.get("session_length_s"),
+            ))
+            settings = {**settings, "effects": effects, "time_scale": args.time_scale,
+                        "session_length_s": simulation.headset.session_length_s}
+        display = _open_display(stack, display_kind, display_address, simulation)
+        try:
+            meter = stack.enter_context(CS2000(simulation.server.port if simulation else args.port,
+                                               timeout_s=_INSTRUMENT_TIMEOUT_S))
+        except CS2000Error as error:
+            raise WorkbenchError(f"cannot use the CS-2000 on {args.port or 'the emulator'}: {error}") from None
+        options = {"clock": (lambda header, journal: simulation.clock)} if simulation else {}
+        if journal is None:
+            run = MeasurementRun.start(args.out, run_plan, display, meter, settings=settings, **options)
+        else:
+            run = MeasurementRun.resume_session(args.out, display, meter, plan=plan, **options)
+        summary = _drive(run)
+    print(f"measure: {summary.one_line('simulated' if args.simulate else 'session')}; "
+          f"wrote {', '.join(str(p) for p in summary.outputs)}")
+    if summary.status == "cancelled":
+        print(f"cancelled: run again with --resume --out {args.out} to continue", file=sys.stderr)
+        return 130
+    return 1 if summary.failed else 0
+
+
+def _check_resume_settings(journal, args, effects: dict) -> None:
+    simulated = bool(journal.header.settings.get("simulated"))
+    if simulated != bool(args.simulate):
+        raise InputError(
+            f"{journal.path} was measured {'with --simulate' if simulated else 'with a real CS-2000'}; "
+            f"resume it the same way ({'--simulate' if simulated else '--port DEVICE'})"
+        )
+    recorded = journal.header.settings.get("effects", {})
+    if args.effect and effects != recorded:
+        raise InputError(
+            f"{journal.path} was simulated with effects {recorded or 'none'}, not {effects}; "
+            "resume without --effect (the journal's effects are used)"
+        )
+
+
+def _open_display(stack: ExitStack, kind: str, address: tuple, simulation):
+    if kind == "simulated":
+        return SimulatedPatchDisplay(simulation.headset)
+    host, port = address
+    try:
+        tcp = stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S, client="vr-workbench"))
+    except PatchDisplayError as error:
+        raise WorkbenchError(str(error)) from None
+    # A simulated session measures the simulated headset, so it must see the patches too.
+    return MirroredPatchDisplay(tcp, SimulatedPatchDisplay(simulation.headset)) if simulation else tcp
+
+
+def _drive(run: MeasurementRun):
+    """Iterate the run with a progress bar; Ctrl-C cancels the measurement cleanly."""
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, lambda *_: run.cancel()) if in_main_thread else None
+    bar = tqdm(total=len(run.plan), unit="patch", file=sys.stderr, disable=not sys.stderr.isatty(),
+               dynamic_ncols=True)
+    run.on_countdown = lambda remaining, total: bar.set_postfix_str(f"{remaining:.0f} s left of {total:.0f} s")
+    try:
+        for event in run.events():
+            if isinstance(event, PatchStarted):
+                bar.n = event.done
+                eta = "" if event.eta_s is None else f", ETA {format_duration(event.eta_s)}"
+                bar.set_description(f"#{event.index} {event.patch.describe()}{eta}")
+            elif isinstance(event, PatchMeasured):
+                bar.n = event.done
+                bar.refresh()
+            elif isinstance(event, RunPaused):
+                bar.set_description("paused")
+            elif isinstance(event, RunFinished):
+                return event.summary
+    finally:
+        bar.close()
+        if in_main_thread:
+            signal.signal(signal.SIGINT, previous)
+    raise AssertionError("a measurement run ended without RunFinished")
