@@ -70,6 +70,10 @@ def test_real_lcd_ti3_files(name):
     assert diagnosis.extended_score.n == 108
     assert diagnosis.extended_score.mean_dE00 <= 0.7
     assert diagnosis.extended_score.mean_dE00 < diagnosis.baseline_score.mean_dE00
+    # the 3D-LUT residual fallback, cross-validated, takes out part of what is left
+    fallback = diagnosis.to_json()["fallback"]
+    assert "cross-validation" in fallback["protocol"]
+    assert fallback["validation"]["mean_dE00"] < diagnosis.extended_score.mean_dE00
 
 
 def test_real_psychtoolbox_oled_ramps():

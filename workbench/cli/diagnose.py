@@ -69,6 +69,9 @@ def _print_text(diagnosis) -> None:
     for i, finding in enumerate(result["findings"], start=1):
         print(f"finding {i} {finding['effect']} (score {finding['score']:.1f}): {finding['evidence']}")
     print(f"extended  {ext['model']}: {figures(ext)}  [{ext['protocol']}]")
+    if result["fallback"] is not None:
+        print(f"fallback  {result['fallback']['model']}: {figures(result['fallback'])}  "
+              f"[{result['fallback']['protocol'].split(' (')[0]}]")
     gain = result["gain"]["mean_dE00_reduction_pct"]
     if gain is not None:
         print(f"gain      mean ΔE00 reduced by {gain:.0f} % on colours neither model was fitted on")

@@ -18,6 +18,7 @@ from workbench.colorimetry import delta_E2000
 from workbench.diagnostics.detectors import DetectorResult, DiagnosisContext, run_detectors
 from workbench.diagnostics.extension import TERMS, fit_extended
 from workbench.display import DisplayModel, GammaMatrixDisplay
+from workbench.display.residual_lut import fit_residual_lut
 from workbench.errors import InputError
 from workbench.session import Session
 
@@ -56,6 +57,8 @@ class Diagnosis:
     baseline_dE: np.ndarray
     extended_dE: np.ndarray
     protocol: str
+    fallback_dE: np.ndarray | None = None
+    fallback_model: str = ""
 
     @property
     def findings(self) -> tuple[DetectorResult, ...]:
@@ -91,6 +94,9 @@ class Diagnosis:
                          "terms": [TERMS[r.effect] for r in self.findings],
                          "validation": None if ext is None else ext.to_json()},
             "gain": {"mean_dE00_reduction_pct": self.gain_pct},
+            "fallback": None if self.fallback_dE is None else {
+                "model": self.fallback_model, "protocol": FALLBACK_PROTOCOL,
+                "validation": score_validation(self.fallback_dE).to_json()},
             "reference_white": "measured display white (mean of the white rows), CIELAB for ΔE00",
         }
 
@@ -117,8 +123,33 @@ def diagnose(session: Session) -> Diagnosis:
         extended_dE = delta_E2000(predicted, validation.XYZ, white)
     else:
         baseline_dE = extended_dE = np.zeros(0)
+    fallback_dE, fallback_model = _residual_lut_fallback(extended, validation, context, found, white)
     return Diagnosis(session=session, context=context, results=results, baseline=baseline,
                      extended=extended, white=white, baseline_dE=np.atleast_1d(baseline_dE),
-                     extended_dE=np.atleast_1d(extended_dE), protocol="holdout")
+                     extended_dE=np.atleast_1d(extended_dE), protocol="holdout",
+                     fallback_dE=fallback_dE, fallback_model=fallback_model)
+
+
+FALLBACK_FOLDS = 5
+FALLBACK_MIN_MIXTURES = 25
+FALLBACK_PROTOCOL = (f"{FALLBACK_FOLDS}-fold cross-validation on the validation colours (the "
+                     "residual LUT learns from mixtures, and the validation colours are the "
+                     "session's only mixtures)")
+
+
+def _residual_lut_fallback(model, validation: Session, context, found, white):
+    """Cross-validated CIEDE2000 of ``model`` + a 3D-LUT residual, or (None, "")."""
+    if len(validation) < FALLBACK_MIN_MIXTURES:
+        return None, ""
+    drift = (context.drift.gain(validation.t_s)[:, None]
+             if "temporal-drift" in found and validation.t_s is not None else 1.0)
+    corrected = validation.XYZ / drift
+    folds = np.random.default_rng(0).permutation(len(validation)) % FALLBACK_FOLDS
+    predicted = np.zeros_like(corrected)
+    for k in range(FALLBACK_FOLDS):
+        train = folds != k
+        fitted = fit_residual_lut(model, validation.rgb[train], corrected[train])
+        predicted[~train] = fitted.forward(validation.rgb[~train])
+    return delta_E2000(predicted * drift, validation.XYZ, white), fitted.describe()
 
 

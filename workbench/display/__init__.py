@@ -10,6 +10,7 @@ from __future__ import annotations
 from workbench.display.base import DisplayModel, as_dac, as_XYZ, quantize_dac
 from workbench.display.extended import ExtendedDisplay
 from workbench.display.gamma_matrix import GammaMatrixDisplay, fit_power_law
+from workbench.display.residual_lut import ResidualLUTDisplay, fit_residual_lut
 from workbench.display.srgb import SRGBDisplay, srgb_decode, srgb_encode
 from workbench.errors import InputError
 
@@ -18,12 +19,14 @@ __all__ = [
     "DisplayModel",
     "ExtendedDisplay",
     "GammaMatrixDisplay",
+    "ResidualLUTDisplay",
     "SRGBDisplay",
     "as_dac",
     "as_XYZ",
     "display_model_from_parameters",
     "fit_display_model",
     "fit_power_law",
+    "fit_residual_lut",
     "quantize_dac",
     "srgb_decode",
     "srgb_encode",
@@ -33,6 +36,7 @@ DISPLAY_MODELS: dict[str, type[DisplayModel]] = {
     GammaMatrixDisplay.model_id: GammaMatrixDisplay,
     SRGBDisplay.model_id: SRGBDisplay,
     ExtendedDisplay.model_id: ExtendedDisplay,
+    ResidualLUTDisplay.model_id: ResidualLUTDisplay,
 }
 
 

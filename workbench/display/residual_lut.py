@@ -1,0 +1,123 @@
+"""3D-LUT residual correction: the general fallback on top of any display model.
+
+``XYZ = base(rgb) + R(rgb)``, where ``R`` is a smooth residual field sampled
+on an ``n × n × n`` grid of DAC values and interpolated trilinearly. The grid
+is filled from measured mixtures by a smoothing thin-plate radial basis fit of
+their residuals (scipy), so it captures whatever the named terms leave behind
+(crosstalk patterns, gamut-dependent errors) without a physical story. It
+needs mixtures to learn from; :mod:`workbench.diagnostics` fits it by
+cross-validation on the validation colours when the session has no other
+mixtures, and says so.
+
+The inverse is a fixed-point iteration on the base model's inverse.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import RBFInterpolator, RegularGridInterpolator
+
+from workbench.display.base import DisplayModel, as_dac, as_XYZ
+from workbench.errors import InputError
+
+__all__ = ["ResidualLUTDisplay", "SMOOTHING_CHOICES", "fit_residual_lut"]
+
+
+@dataclass(frozen=True, eq=False)
+class ResidualLUTDisplay(DisplayModel):
+    base: DisplayModel
+    lut: np.ndarray  # (n, n, n, 3) residual XYZ at the grid nodes
+
+    model_id = "lut3d-residual"
+
+    def __post_init__(self):
+        lut = np.asarray(self.lut, dtype=float)
+        if lut.ndim != 4 or lut.shape[-1] != 3 or len(set(lut.shape[:3])) != 1:
+            raise InputError(f"3D-LUT residual must have shape (n, n, n, 3); got {lut.shape}")
+        object.__setattr__(self, "lut", lut)
+        nodes = np.linspace(0.0, 255.0, lut.shape[0])
+        object.__setattr__(self, "_interpolator",
+                           RegularGridInterpolator((nodes, nodes, nodes), lut))
+
+    @property
+    def white_XYZ(self):
+        return self.base.white_XYZ
+
+    @property
+    def black_XYZ(self):
+        return self.base.black_XYZ
+
+    def residual(self, rgb) -> np.ndarray:
+        rgb = as_dac(rgb)
+        return self._interpolator(rgb.reshape(-1, 3)).reshape(rgb.shape)
+
+    def forward(self, rgb) -> np.ndarray:
+        return self.base.forward(rgb) + self.residual(rgb)
+
+    def linear_drive(self, XYZ) -> np.ndarray:
+        XYZ = as_XYZ(XYZ)
+        rgb = self.base.inverse(XYZ)
+        for _ in range(8):
+            rgb = self.base.inverse(XYZ - self.residual(rgb))
+        return self.base.linear_drive(XYZ - self.residual(rgb))
+
+    def dac_from_drive(self, drive) -> np.ndarray:
+        return self.base.dac_from_drive(drive)
+
+    def parameters(self) -> dict:
+        return {"base_type": self.base.model_id, "base": self.base.parameters(),
+                "lut_size": int(self.lut.shape[0]), "lut": self.lut.reshape(-1, 3).tolist()}
+
+    @classmethod
+    def from_parameters(cls, parameters: dict) -> "ResidualLUTDisplay":
+        from workbench.display import display_model_from_parameters
+
+        size = int(parameters["lut_size"])
+        return cls(base=display_model_from_parameters(parameters["base_type"], parameters["base"]),
+                   lut=np.asarray(parameters["lut"], dtype=float).reshape(size, size, size, 3))
+
+    def describe(self) -> str:
+        return f"{self.base.describe()} + {self.lut.shape[0]}³ residual LUT"
+
+
+SMOOTHING_CHOICES = (0.003, 0.01, 0.03, 0.1, 0.3)
+"""RBF smoothing per training point tried by the inner cross-validation."""
+
+
+def _choose_smoothing(rgb: np.ndarray, residual: np.ndarray, folds: int = 4) -> float:
+    """Smoothing (per point) with the lowest inner cross-validated squared error."""
+    order = np.random.default_rng(0).permutation(len(rgb)) % folds
+    errors = []
+    for per_point in SMOOTHING_CHOICES:
+        total = 0.0
+        for k in range(folds):
+            train = order != k
+            field = RBFInterpolator(rgb[train] / 255.0, residual[train], kernel="thin_plate_spline",
+                                    smoothing=per_point * train.sum())
+            total += float(np.sum((field(rgb[~train] / 255.0) - residual[~train]) ** 2))
+        errors.append(total)
+    return SMOOTHING_CHOICES[int(np.argmin(errors))]
+
+
+def fit_residual_lut(base: DisplayModel, rgb, XYZ, *, size: int = 9,
+                     smoothing: float | None = None) -> ResidualLUTDisplay:
+    """Fit the residual field of ``base`` on measured mixtures ``(rgb, XYZ)``.
+
+    ``smoothing`` is the thin-plate RBF smoothing per training point; by
+    default it is chosen by an inner 4-fold cross-validation on these mixtures
+    among :data:`SMOOTHING_CHOICES`.
+    """
+    rgb = as_dac(rgb).reshape(-1, 3)
+    XYZ = as_XYZ(XYZ).reshape(-1, 3)
+    if len(rgb) < 10:
+        raise InputError(f"a residual LUT needs at least 10 measured mixtures; got {len(rgb)}")
+    residual = XYZ - base.forward(rgb)
+    if smoothing is None:
+        smoothing = _choose_smoothing(rgb, residual)
+    field = RBFInterpolator(rgb / 255.0, residual, kernel="thin_plate_spline",
+                            smoothing=smoothing * len(rgb))
+    nodes = np.linspace(0.0, 1.0, size)
+    grid = np.stack(np.meshgrid(nodes, nodes, nodes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return ResidualLUTDisplay(base=base, lut=field(grid).reshape(size, size, size, 3))
