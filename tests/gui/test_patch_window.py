@@ -1,0 +1,79 @@
+"""The full-screen patch window, driven from a worker thread as the runner does."""
+
+import threading
+
+import pytest
+
+from instruments.patch_display import PatchDisplay, PatchDisplayError
+from workbench.errors import InputError
+
+pytest.importorskip("PySide6")
+from workbench.gui.patch_window import PatchWindow, QtPatchDisplay, screen_names  # noqa: E402
+
+pytestmark = pytest.mark.gui
+
+
+def _colour_at_centre(window):
+    """What the window paints, at 8 bits per channel whatever the (virtual) screen's depth."""
+    from PySide6.QtGui import QImage
+
+    image = QImage(window.size(), QImage.Format.Format_RGB32)
+    window.render(image)
+    colour = image.pixelColor(window.width() // 2, window.height() // 2)
+    return [colour.red(), colour.green(), colour.blue()]
+
+
+def test_a_worker_thread_shows_patches_and_gets_control_back_once_painted(qtbot):
+    window = PatchWindow(0)
+    qtbot.addWidget(window)
+    display = QtPatchDisplay(window, timeout_s=5.0)
+    assert isinstance(display, PatchDisplay)
+    qtbot.waitExposed(window)
+    errors = []
+
+    def worker():
+        try:
+            for rgb in ([255, 0, 0], [10, 200, 30]):
+                display.show(rgb)
+                assert window.rgb == rgb  # painted before show returned
+        except Exception as error:  # noqa: BLE001 - reported below
+            errors.append(error)
+
+    thread = threading.Thread(target=worker)
+    thread.start()
+    qtbot.waitUntil(lambda: not thread.is_alive(), timeout=10_000)
+    assert errors == []
+    assert _colour_at_centre(window) == [10, 200, 30]
+
+
+def test_show_from_the_gui_thread_is_immediate(qtbot):
+    window = PatchWindow(0)
+    qtbot.addWidget(window)
+    QtPatchDisplay(window).show([1, 2, 3])
+    assert window.rgb == [1, 2, 3] and _colour_at_centre(window) == [1, 2, 3]
+
+
+def test_a_window_without_an_event_loop_times_out_with_a_clear_message(qtbot):
+    window = PatchWindow(0)
+    qtbot.addWidget(window)
+    display = QtPatchDisplay(window, timeout_s=0.2)
+    errors = []
+    thread = threading.Thread(target=lambda: errors.extend(_catch(display.show, [5, 5, 5])))
+    thread.start()
+    thread.join(5.0)  # the GUI thread is blocked here: nothing can paint
+    assert len(errors) == 1 and isinstance(errors[0], PatchDisplayError)
+    assert "did not paint [5, 5, 5] within 0.2 s" in str(errors[0])
+
+
+def _catch(function, *args):
+    try:
+        function(*args)
+    except Exception as error:  # noqa: BLE001
+        return [error]
+    return []
+
+
+def test_an_unknown_screen_lists_the_screens(qtbot):
+    with pytest.raises(InputError, match="no screen 99; choose one of: 0: "):
+        PatchWindow(99)
+    assert screen_names()[0].startswith("0: ")

@@ -1,0 +1,155 @@
+"""A full-screen patch window: shows calibration patches on a chosen screen.
+
+For headsets in extended mode (the HMD appears as a second monitor) and for
+ordinary monitors. :class:`PatchWindow` is a borderless full-screen widget of
+one solid colour; :class:`QtPatchDisplay` adapts it to the
+:class:`~instruments.patch_display.PatchDisplay` protocol, so that the
+measurement runner, working off the GUI thread, can call ``show(rgb)`` and get
+control back once the window has painted the patch.
+
+The window writes the DAC values straight into its pixels: Qt applies no
+colour management to widget painting on X11, Wayland and Windows. (On macOS
+the window server may colour-match to the display profile; measure through a
+VR application over the TCP patch protocol there.)
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+
+from PySide6.QtCore import QMetaObject, QObject, Qt, QThread, Signal, Slot
+from PySide6.QtGui import QColor, QGuiApplication, QPainter
+from PySide6.QtWidgets import QWidget
+
+from instruments.patch_display import PatchDisplayError, validate_patch_rgb
+from workbench.errors import InputError
+
+__all__ = ["PatchWindow", "QtPatchDisplay", "screen_names"]
+
+_LOG = logging.getLogger(__name__)
+_FULL_COLOUR_DEPTH = 24  # bits per pixel that carry 8-bit DAC values unchanged
+
+
+def screen_names() -> list[str]:
+    """Names and geometries of the screens, in the order ``screen_index`` counts them."""
+    return [f"{i}: {s.name()} {s.geometry().width()}x{s.geometry().height()}"
+            for i, s in enumerate(QGuiApplication.screens())]
+
+
+class PatchWindow(QWidget):
+    """A borderless full-screen window of one solid colour.
+
+    Parameters
+    ----------
+    screen_index : int
+        Which screen (see :func:`screen_names`); the headset in extended mode
+        is usually the last.
+
+    Raises
+    ------
+    InputError
+        If there is no such screen; the message lists the screens.
+
+    Attributes
+    ----------
+    painted : Signal(list)
+        Emitted after each paint with the ``[r, g, b]`` on screen.
+    """
+
+    painted = Signal(list)
+
+    def __init__(self, screen_index: int = 0):
+        super().__init__(None, Qt.WindowType.FramelessWindowHint | Qt.WindowType.WindowStaysOnTopHint)
+        screens = QGuiApplication.screens()
+        if not 0 <= screen_index < len(screens):
+            raise InputError(f"no screen {screen_index}; choose one of: {'; '.join(screen_names())}")
+        self.setWindowTitle("vr-workbench patch")
+        self.setCursor(Qt.CursorShape.BlankCursor)
+        self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
+        screen = screens[screen_index]
+        self.setGeometry(screen.geometry())
+        if screen.depth() < _FULL_COLOUR_DEPTH:
+            _LOG.warning("screen %s has a colour depth of %d bits: patches will be quantised; "
+                         "set it to 24-bit colour before measuring", screen.name(), screen.depth())
+        self._rgb = [0, 0, 0]
+
+    @property
+    def rgb(self) -> list:
+        """The DAC values of the patch on screen."""
+        return list(self._rgb)
+
+    @Slot(list)
+    def set_patch(self, rgb: list) -> None:
+        """Show ``rgb`` (GUI thread): repaint at once."""
+        self._rgb = validate_patch_rgb(rgb)
+        self.repaint()
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt's name
+        painter = QPainter(self)
+        painter.fillRect(self.rect(), QColor(*self._rgb))
+        painter.end()
+        self.painted.emit(list(self._rgb))
+
+
+class _Bridge(QObject):
+    """Carries ``show`` requests from a worker thread to the GUI thread."""
+
+    request = Signal(list)
+
+
+class QtPatchDisplay:
+    """:class:`~instruments.patch_display.PatchDisplay` over a :class:`PatchWindow`.
+
+    ``show`` may be called from any thread; from a worker it posts the patch to
+    the GUI thread and waits (at most ``timeout_s``) until the window has
+    painted it.
+
+    Parameters
+    ----------
+    window : PatchWindow
+    timeout_s : float
+        Longest wait for the window to paint a patch.
+    """
+
+    def __init__(self, window: PatchWindow, timeout_s: float = 5.0):
+        self.window = window
+        self.timeout_s = float(timeout_s)
+        self._bridge = _Bridge()
+        self._bridge.moveToThread(window.thread())
+        self._bridge.request.connect(window.set_patch, Qt.ConnectionType.QueuedConnection)
+        self._painted = threading.Event()
+        self._wanted: list | None = None
+        window.painted.connect(self._on_painted, Qt.ConnectionType.DirectConnection)
+        if not window.isVisible():
+            window.showFullScreen()
+
+    def _on_painted(self, rgb: list) -> None:
+        if rgb == self._wanted:
+            self._painted.set()
+
+    def show(self, rgb_dac) -> None:
+        """Show ``rgb_dac`` and return once the window has painted it."""
+        rgb = validate_patch_rgb(rgb_dac)
+        if QThread.currentThread() is self.window.thread():
+            self.window.set_patch(rgb)
+            return
+        self._painted.clear()
+        self._wanted = rgb
+        self._bridge.request.emit(rgb)
+        if not self._painted.wait(self.timeout_s):
+            raise PatchDisplayError(
+                f"the patch window did not paint {rgb} within {self.timeout_s:g} s; "
+                "is the GUI event loop running (and the window on a connected screen)?"
+            )
+
+    def close(self) -> None:
+        """Close the window (from the GUI thread, or queued from a worker)."""
+        if QThread.currentThread() is self.window.thread():
+            self.window.close()
+        else:
+            QMetaObject.invokeMethod(self.window, "close", Qt.ConnectionType.QueuedConnection)
+
+    def describe(self) -> str:
+        screen = self.window.screen()
+        return f"full-screen patch window on {screen.name() if screen else 'a screen'}"
