@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
-import os
-import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -29,6 +27,7 @@ from workbench.display import (
     display_model_from_parameters,
 )
 from workbench.errors import WorkbenchError
+from workbench.fileio import atomic_writer
 
 __all__ = [
     "PROFILE_FORMAT",
@@ -205,19 +204,9 @@ def save_profile(profile: Profile, path) -> Path:
     path = Path(path)
     document = profile.to_document()
     validate_profile_document(document, str(path))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            json.dump(document, handle, indent=1)
-            handle.write("\n")
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_writer(path) as handle:
+        json.dump(document, handle, indent=1)
+        handle.write("\n")
     return path
 
 

@@ -17,13 +17,13 @@ import csv
 import math
 import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from workbench.errors import SpectrumFileError
+from workbench.fileio import atomic_writer
 
 __all__ = [
     "SESSION_KINDS",
@@ -219,25 +219,15 @@ def write_session_csv(session: Session, path: str | os.PathLike) -> Path:
         header.append("t_s")
     if session.spectra is not None:
         header += [f"nm{int(round(w))}" for w in session.wavelengths]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(header)
-            for i in range(len(session)):
-                row = [session.kind[i], *(f"{v:g}" for v in session.rgb[i]),
-                       *(f"{v:.6g}" for v in session.XYZ[i])]
-                if session.t_s is not None:
-                    row.append(f"{session.t_s[i]:.3f}")
-                if session.spectra is not None:
-                    row += [f"{v:.6g}" for v in session.spectra[i]]
-                writer.writerow(row)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_writer(path, newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        for i in range(len(session)):
+            row = [session.kind[i], *(f"{v:g}" for v in session.rgb[i]),
+                   *(f"{v:.6g}" for v in session.XYZ[i])]
+            if session.t_s is not None:
+                row.append(f"{session.t_s[i]:.3f}")
+            if session.spectra is not None:
+                row += [f"{v:.6g}" for v in session.spectra[i]]
+            writer.writerow(row)
     return path

@@ -12,8 +12,6 @@ from __future__ import annotations
 import base64
 import html
 import io
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +21,7 @@ from matplotlib.figure import Figure
 from workbench import __version__
 from workbench.diagnostics.evidence import channel_sweeps, xy_of
 from workbench.diagnostics.selection import Diagnosis
+from workbench.fileio import atomic_writer
 
 __all__ = ["render_report", "write_report"]
 
@@ -175,14 +174,6 @@ def write_report(diagnosis: Diagnosis, path) -> Path:
     """Write the report atomically."""
     path = Path(path)
     text = render_report(diagnosis)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_writer(path) as handle:
+        handle.write(text)
     return path

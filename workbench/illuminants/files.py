@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 import tempfile
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
@@ -24,6 +23,7 @@ import numpy as np
 
 from workbench.colorimetry import WORKING_SHAPE, as_spectral_distribution
 from workbench.errors import SpectrumFileError
+from workbench.fileio import atomic_writer
 from workbench.illuminants.source import Illuminant
 
 __all__ = [
@@ -107,32 +107,16 @@ def read_spectrum_csv(path) -> colour.SpectralDistribution:
     return colour.SpectralDistribution(values, wavelengths, name=path.stem)
 
 
-def _atomic_write(path: Path, write) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        write(tmp)
-        with open(tmp, "rb+") as handle:
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
 
 
 def write_spectrum_csv(sd: colour.SpectralDistribution, path) -> Path:
     """Write ``wavelength,value`` rows with a header, atomically."""
-    def write(tmp):
-        with open(tmp, "w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(["wavelength", "value"])
-            for wavelength, value in zip(sd.wavelengths, sd.values):
-                writer.writerow([f"{wavelength:g}", f"{value:.8g}"])
-
-    return _atomic_write(Path(path), write)
+    with atomic_writer(path, newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["wavelength", "value"])
+        for wavelength, value in zip(sd.wavelengths, sd.values):
+            writer.writerow([f"{wavelength:g}", f"{value:.8g}"])
+    return Path(path)
 
 
 def read_spectrum_tm27(path) -> colour.SpectralDistribution:
@@ -170,16 +154,19 @@ def write_spectrum_tm27(sd: colour.SpectralDistribution, path, *, description: s
         laboratory="", report_number="", report_date="", document_creation_date="",
         comments="written by the VR colour workbench")
 
-    def write(tmp):
-        document = colour.io.SpectralDistribution_IESTM2714(
-            header=header, spectral_quantity="relative",
-            reflection_geometry="other", transmission_geometry="other",
-            bandwidth_FWHM=float(np.min(np.diff(sd.wavelengths))), bandwidth_corrected=False,
-            data=np.asarray(sd.values), domain=np.asarray(sd.wavelengths))
-        document.path = tmp  # set after construction: a path given to it is read at once
-        document.write()
-
-    return _atomic_write(Path(path), write)
+    document = colour.io.SpectralDistribution_IESTM2714(
+        header=header, spectral_quantity="relative",
+        reflection_geometry="other", transmission_geometry="other",
+        bandwidth_FWHM=float(np.min(np.diff(sd.wavelengths))), bandwidth_corrected=False,
+        data=np.asarray(sd.values), domain=np.asarray(sd.wavelengths))
+    with tempfile.TemporaryDirectory() as folder:
+        # colour-science writes by path: write aside, then move the bytes in atomically
+        document.path = str(Path(folder) / "spectrum.xml")  # set after construction: a path
+        document.write()                                      # given to it is read at once
+        content = Path(document.path).read_bytes()
+    with atomic_writer(path, "wb") as handle:
+        handle.write(content)
+    return Path(path)
 
 
 SPECTRUM_READERS = {".csv": read_spectrum_csv, ".xml": read_spectrum_tm27}

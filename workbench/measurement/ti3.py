@@ -15,12 +15,12 @@ Argyll CMS documentation, "ti3 file format" (``.ti3`` is a CGATS.17 text file).
 from __future__ import annotations
 
 import os
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
+from workbench.fileio import atomic_writer
 from workbench.measurement.journal import SOFTWARE
 from workbench.session import Session
 
@@ -74,16 +74,6 @@ def session_to_ti3_text(session: Session, instrument: str = "Konica Minolta CS-2
 def write_session_ti3(session: Session, path: str | os.PathLike, instrument: str = "Konica Minolta CS-2000") -> Path:
     """Write ``session`` as an Argyll ``.ti3`` at ``path``, atomically; returns the path."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as handle:
-            handle.write(session_to_ti3_text(session, instrument))
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_writer(path, encoding="ascii", newline="\n") as handle:
+        handle.write(session_to_ti3_text(session, instrument))
     return path
