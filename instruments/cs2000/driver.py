@@ -303,7 +303,9 @@ class CS2000:
         if not timeout_s > 0:
             raise ValueError(f"timeout_s must be positive, got {timeout_s!r}")
         if spectral_format not in ("ascii", "float32"):
-            raise ValueError(f"spectral_format must be 'ascii' or 'float32', got {spectral_format!r}")
+            raise ValueError(
+                f"spectral_format must be 'ascii' or 'float32', got {spectral_format!r}"
+            )
         if not poll_interval_s > 0:
             raise ValueError(f"poll_interval_s must be positive, got {poll_interval_s!r}")
         self._timeout_s = float(timeout_s)
@@ -322,7 +324,8 @@ class CS2000:
                 raise TypeError("port must be a device name or an object with read(n) and write(b)")
             self._port = port
             self._owns_port = False
-            self._port_name = str(getattr(port, "port", None) or getattr(port, "name", None) or port)
+            name = getattr(port, "port", None) or getattr(port, "name", None)
+            self._port_name = str(name or port)
             if hasattr(port, "timeout"):
                 try:
                     port.timeout = poll_interval_s
@@ -393,7 +396,7 @@ class CS2000:
             if flush is not None:
                 flush()
         except serial.SerialTimeoutException as exc:
-            raise CS2000Timeout(f"writing {command.strip()!r}", self._timeout_s) from exc
+            raise CS2000Timeout(f"writing {command.strip().decode()}", self._timeout_s) from exc
         except _PORT_ERRORS as exc:
             raise self._lost(f"sending {command.strip().decode()}", exc) from exc
 
@@ -531,7 +534,9 @@ class CS2000:
             raise ProtocolError(f"SPMR reply: {exc}", reply.raw) from exc
         raise ProtocolError(f"SPMR reply has unknown speed mode {mode}", reply.raw)
 
-    def set_speed_mode(self, mode: int, integration: float | None = None, nd: int | None = None) -> None:
+    def set_speed_mode(
+        self, mode: int, integration: float | None = None, nd: int | None = None
+    ) -> None:
         """Set the speed mode (``SPMS``).
 
         Parameters
@@ -547,17 +552,21 @@ class CS2000:
             current setting (read with ``SPMR``).
         """
         if mode not in _SPEED_MODES:
-            raise ValueError(f"speed mode must be one of {sorted(_SPEED_MODES)} ({_SPEED_MODES}), got {mode!r}")
+            raise ValueError(f"speed mode must be one of {_SPEED_MODES}, got {mode!r}")
         if nd is not None and nd not in (0, 1, 2):
             raise ValueError(f"nd must be 0 (off), 1 (on) or 2 (auto), got {nd!r}")
         if mode in (0, 1) and integration is not None:
-            raise ValueError(f"speed mode {mode} ({_SPEED_MODES[mode]}) sets its own integration time")
-        if mode in (2, 4):
-            if integration is None or integration != int(integration) or not 1 <= integration <= 16:
-                raise ValueError(f"speed mode {mode} needs integration in whole seconds 1..16, got {integration!r}")
-        if mode == 3:
-            if integration is None or not 0.005 <= integration <= 120:
-                raise ValueError(f"manual speed mode needs integration in seconds 0.005..120, got {integration!r}")
+            raise ValueError(f"speed mode {mode} ({_SPEED_MODES[mode]}) sets its own integration")
+        if mode in (2, 4) and (
+            integration is None or integration != int(integration) or not 1 <= integration <= 16
+        ):
+            raise ValueError(
+                f"speed mode {mode} needs integration in whole seconds 1..16, got {integration!r}"
+            )
+        if mode == 3 and (integration is None or not 0.005 <= integration <= 120):
+            raise ValueError(
+                f"manual speed mode needs integration in seconds 0.005..120, got {integration!r}"
+            )
         if nd is None:
             nd = self.speed_mode().nd
         self._send_speed_mode(SpeedMode(mode, integration, nd))
@@ -593,10 +602,12 @@ class CS2000:
             sent in 0.01 Hz units.
         """
         if mode not in _SYNC_MODES:
-            raise ValueError(f"sync mode must be one of {sorted(_SYNC_MODES)} ({_SYNC_MODES}), got {mode!r}")
+            raise ValueError(f"sync mode must be one of {_SYNC_MODES}, got {mode!r}")
         if mode == 1:
             if frequency_hz is None or not 20 <= frequency_hz <= 200:
-                raise ValueError(f"internal sync needs frequency_hz in 20..200, got {frequency_hz!r}")
+                raise ValueError(
+                    f"internal sync needs frequency_hz in 20..200, got {frequency_hz!r}"
+                )
             self._query("SCMS", 1, round(frequency_hz * 100))
         else:
             if frequency_hz is not None:
@@ -704,15 +715,43 @@ class CS2000:
         except CS2000Error as err:
             if raise_errors:
                 raise
-            logger.error("%s: could not restore the speed mode %s: %s", self._port_name, previous, err)
+            logger.error(
+                "%s: could not restore the speed mode %s: %s", self._port_name, previous, err
+            )
 
     def _run_measurement(
         self,
         progress: Callable[[float, float], None] | None,
         should_cancel: Callable[[], bool],
     ) -> int:
-        """``MEAS,1`` up to and including the second line; return ``ttt``."""
+        """``MEAS,1`` up to and including the second line; return ``ttt``.
+
+        Whatever interrupts the wait (cancel flag, timeout, a garbled
+        countdown, ``KeyboardInterrupt``, an exception from ``progress``)
+        stops the instrument with ``MEAS,0`` so that it is left idle.
+        """
         self._write(encode_command("MEAS", 1))
+        try:
+            return self._await_measurement(progress, should_cancel)
+        except _CancelRequested as request:
+            self._cancel_measurement(str(request))
+        except CS2000Timeout:
+            self._stop_measurement("its end did not arrive in time")
+            raise
+        except ProtocolError:
+            self._stop_measurement("its reply was not understood")
+            raise
+        except CS2000Error:  # an ERnn reply ended it, or the port is gone
+            raise
+        except BaseException:
+            self._stop_measurement("the caller was interrupted")
+            raise
+
+    def _await_measurement(
+        self,
+        progress: Callable[[float, float], None] | None,
+        should_cancel: Callable[[], bool],
+    ) -> int:
         started = self._clock()
         try:
             first = self._read_reply(
@@ -721,13 +760,15 @@ class CS2000:
                 on_wait=should_cancel,
             )
         except _CancelRequested:
-            self._cancel_measurement("the pre-measurement")
+            raise _CancelRequested("the pre-measurement") from None
         if not first.ok:
             raise error_from_reply(first, "MEAS,1")
         try:
             countdown = int(first.fields[0]) if first.fields else 242
         except ValueError as exc:
-            raise ProtocolError(f"MEAS,1 countdown {first.fields[0]!r} is not a number", first.raw) from exc
+            raise ProtocolError(
+                f"MEAS,1 countdown {first.fields[0]!r} is not a number", first.raw
+            ) from exc
         total = float(countdown)
         counting_from = self._clock()
         logger.info("%s: measuring, %d s to go", self._port_name, countdown)
@@ -743,18 +784,16 @@ class CS2000:
                     progress(remaining, total)
             return False
 
-        tick()
         try:
+            if tick():
+                raise _CancelRequested
             second = self._read_reply(
                 counting_from + total + self._timeout_s,
                 f"MEAS,1 (end of the {countdown} s measurement)",
                 on_wait=tick,
             )
         except _CancelRequested:
-            self._cancel_measurement("the measurement")
-        except CS2000Timeout:
-            self._stop_after_timeout()
-            raise
+            raise _CancelRequested("the measurement") from None
         if not second.ok:
             raise error_from_reply(second, "MEAS,1 (end of measurement)")
         if progress is not None:
@@ -778,13 +817,16 @@ class CS2000:
             logger.warning("%s: no acknowledgement of MEAS,0: %s", self._port_name, exc)
         raise MeasurementCancelled(during)
 
-    def _stop_after_timeout(self) -> None:
-        """After the second line timed out, stop a measurement that may still run."""
+    def _stop_measurement(self, why: str) -> None:
+        """Best effort: stop a measurement that may still run (``MEAS,0``)."""
+        logger.warning("%s: stopping the measurement (MEAS,0) because %s", self._port_name, why)
         try:
             self._write(encode_command("MEAS", 0))
-            self._read_reply(self._clock() + self._timeout_s, "MEAS,0")
-        except (CS2000Timeout, ProtocolError) as exc:
-            logger.warning("%s: MEAS,0 after a timeout: %s", self._port_name, exc)
+            deadline = self._clock() + self._timeout_s
+            while self._read_reply(deadline, "MEAS,0").fields:
+                pass  # a late "OK00,ttt"
+        except CS2000Error as exc:
+            logger.warning("%s: MEAS,0 got no clean acknowledgement: %s", self._port_name, exc)
 
     def _read_measurement(self, countdown: int) -> Measurement:
         binary = self._spectral_format == "float32"

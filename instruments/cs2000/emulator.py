@@ -45,7 +45,7 @@ import math
 import re
 import struct
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import colour
 import numpy as np
@@ -231,7 +231,7 @@ class _Measurement:
     second_line: str | None  # None: never sent (TimeoutFault)
     result: _Result | None
     terminator: bytes
-    started_ok: bool = field(default=True)
+    started_ok: bool = True
 
 
 class CS2000Emulator:
@@ -316,7 +316,10 @@ class CS2000Emulator:
             2: cmfs["CIE 1931 2 Degree Standard Observer"].copy().align(shape),
             10: cmfs["CIE 1964 10 Degree Standard Observer"].copy().align(shape),
         }
-        self._cmf_values = {k: np.asarray(v.values, dtype=np.float64) for k, v in self._cmfs.items()}
+        self._cmf_values = {
+            degrees: np.asarray(cmfs.values, dtype=np.float64)
+            for degrees, cmfs in self._cmfs.items()
+        }
 
     # ------------------------------------------------------------------ public state
 
@@ -403,7 +406,8 @@ class CS2000Emulator:
                 return bytes(out)
         if not m.first_line and now >= m.second_due:
             self._measurement = None
-            self._last = m.result if m.result is not None and m.second_line in ("OK00", None) else None
+            ended_ok = m.second_line in ("OK00", None)  # None: the line was lost, data kept
+            self._last = m.result if ended_ok else None
             if m.second_line is None:
                 logger.info("emulated fault: the end-of-measurement line is not sent")
             else:
@@ -462,15 +466,19 @@ class CS2000Emulator:
         for fault in fired:
             if isinstance(fault, GarbageFault):
                 self._garbage += fault.garbage
-        error = next((f for f in fired if isinstance(f, ErrorFault) and (f.line == 1 or not is_meas)), None)
+        errors = [f for f in fired if isinstance(f, ErrorFault)]
+        error = next((f for f in errors if f.line == 1 or not is_meas), None)
         if error is not None:
             return self._emit(error.code, terminator)
-        end_error = next((f.code for f in fired if isinstance(f, ErrorFault)), None)
+        end_error = next((f.code for f in errors), None)
         drop_end = any(isinstance(f, TimeoutFault) for f in fired)
         line = self._dispatch(text, terminator, now, end_error, drop_end)
         return self._emit(line, terminator) if line is not None else b""
 
-    def _dispatch(self, text: str, terminator: bytes, now: float, end_error: str | None, drop_end: bool) -> str | None:
+    def _dispatch(
+        self, text: str, terminator: bytes, now: float, end_error: str | None, drop_end: bool
+    ) -> str | None:
+        """Return the reply line (without terminator), or None when it comes later."""
         name, *params = [p.strip() for p in text.split(",")]
         name = name.upper()
         if self._measurement is not None:
@@ -601,7 +609,14 @@ class CS2000Emulator:
 
     # ------------------------------------------------------------------ measuring
 
-    def _meas(self, params: list[str], terminator: bytes, now: float, end_error: str | None, drop_end: bool) -> str | None:
+    def _meas(
+        self,
+        params: list[str],
+        terminator: bytes,
+        now: float,
+        end_error: str | None,
+        drop_end: bool,
+    ) -> str | None:
         if len(params) != 1:
             return "ER00"
         if params[0] == "0":
@@ -627,8 +642,11 @@ class CS2000Emulator:
         pre_s, total_s, integration_s = self._timing(luminance, mode, integration)
         first_due = now + pre_s * self._time_scale
         if luminance > limit:
-            logger.info("over range: %.4g cd/m² > %.4g cd/m² (ND %s)", luminance, limit, "on" if nd_used else "off")
-            self._measurement = _Measurement(first_due, "ER10", first_due, None, None, terminator, started_ok=False)
+            logger.info("over range: %.4g cd/m² > %.4g cd/m² (ND %s)",
+                        luminance, limit, "on" if nd_used else "off")
+            self._measurement = _Measurement(
+                first_due, "ER10", first_due, None, None, terminator, started_ok=False
+            )
             return None
         countdown = int(min(242, max(2, math.ceil(total_s - 1e-9))))
         measured = self._add_noise(radiance)
@@ -654,7 +672,9 @@ class CS2000Emulator:
         )
         return None
 
-    def _timing(self, luminance: float, mode: int, integration: int | None) -> tuple[float, float, float]:
+    def _timing(
+        self, luminance: float, mode: int, integration: int | None
+    ) -> tuple[float, float, float]:
         """Return (pre-measurement s, measurement s, integration s), unscaled."""
         floor = LUMINANCE_RANGE_CD_M2[self._angle][0]
         equivalent = max(luminance, 1e-12) * (_FLOOR_1DEG / floor)
@@ -691,7 +711,8 @@ class CS2000Emulator:
         u_prime, v_prime = 4 * X / denominator, 9 * Y / denominator
         cct, duv = NOT_COMPUTABLE, NOT_COMPUTABLE
         try:
-            t, d = (float(v) for v in uv_to_CCT_Ohno2013(np.array([u_prime, v_prime * 2 / 3]), cmfs=self._cmfs[degrees]))
+            uv_1960 = np.array([u_prime, v_prime * 2 / 3])
+            t, d = (float(v) for v in uv_to_CCT_Ohno2013(uv_1960, cmfs=self._cmfs[degrees]))
             if 1_000 <= t <= 100_000 and abs(d) <= 0.05:
                 cct, duv = f"{round(t):5d}", f"{d:+.4f}"
         except (ValueError, ArithmeticError) as exc:
@@ -706,5 +727,6 @@ class CS2000Emulator:
                 if math.isfinite(wl) and math.isfinite(pe):
                     wavelength, purity = f"{wl:.2f}", f"{pe:.4f}"
             except (ValueError, ArithmeticError, IndexError) as exc:
-                logger.debug("dominant wavelength not computable for xy=(%.4f, %.4f): %s", x, y, exc)
-        return [f"{x:.4f}", f"{y:.4f}", f"{u_prime:.4f}", f"{v_prime:.4f}", cct, duv, wavelength, purity]
+                logger.debug("dominant wavelength not computable at xy=(%.4f, %.4f): %s", x, y, exc)
+        chromaticity = [f"{v:.4f}" for v in (x, y, u_prime, v_prime)]
+        return [*chromaticity, cct, duv, wavelength, purity]

@@ -172,7 +172,7 @@ def parse_reply(raw: bytes) -> Reply:
     match = _STATUS.search(raw)
     if match is None:
         raise ProtocolError(f"no OK/ER status in {raw!r}", raw_reply=raw)
-    body = raw[match.end() :].rstrip(b"\r\n \t")
+    body = raw[match.end() :].rstrip(b"\r\n \t\x00")
     if body and not body.startswith(b","):
         raise ProtocolError(f"unexpected bytes after the status in {raw!r}", raw_reply=raw)
     text = body[1:].decode("ascii", errors="replace") if body else ""
@@ -570,7 +570,8 @@ def parse_colorimetry(reply: Reply) -> dict[str, float | None]:
         except ValueError:
             result[key] = None
             continue
-        result[key] = None if (not math.isfinite(value) or abs(value) >= NOT_COMPUTABLE_ABS) else value
+        placeholder = not math.isfinite(value) or abs(value) >= NOT_COMPUTABLE_ABS
+        result[key] = None if placeholder else value
     return result
 
 

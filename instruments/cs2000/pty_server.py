@@ -53,7 +53,9 @@ class PtyServer:
         self._vanish_requested = threading.Event()
         self._master_closed = threading.Event()
         self._error: BaseException | None = None
-        self._thread = threading.Thread(target=self._run, name=f"cs2000-pty {self.port}", daemon=True)
+        self._thread = threading.Thread(
+            target=self._run, name=f"cs2000-pty {self.port}", daemon=True
+        )
         self._thread.start()
         logger.info("CS-2000 emulator serving on %s", self.port)
 

@@ -175,6 +175,7 @@ def test_encode_command_uses_crlf_and_commas():
         (b"\x00\xfe#OK00,CS-2000  ,1,42", "OK00", ("CS-2000", "1", "42")),
         (b"ER83", "ER83", ()),
         (b"\xffER10 \r", "ER10", ()),
+        (b"OK00,1\x00\x00", "OK00", ("1",)),
     ],
 )
 def test_parse_reply_is_tolerant(raw, status, fields):
@@ -509,6 +510,23 @@ def test_cancel_before_start_sends_nothing():
     with expected_protocol([]) as cs:
         with pytest.raises(MeasurementCancelled):
             cs.measure(cancel=event)
+
+
+def test_an_exception_in_progress_stops_the_instrument_and_propagates():
+    def progress(left, total):
+        raise KeyboardInterrupt
+
+    exchanges = [(b"MEAS,1\r\n", b"OK00,010\r\n"), (b"MEAS,0\r\n", b"OK00\r\n")]
+    with expected_protocol(exchanges) as cs:
+        with pytest.raises(KeyboardInterrupt):
+            cs.measure(progress=progress)
+
+
+def test_a_garbled_countdown_stops_the_instrument():
+    exchanges = [(b"MEAS,1\r\n", b"OK00,abc\r\n"), (b"MEAS,0\r\n", b"OK00\r\n")]
+    with expected_protocol(exchanges) as cs:
+        with pytest.raises(ProtocolError, match="countdown"):
+            cs.measure()
 
 
 def test_missing_second_line_times_out_after_ttt_plus_margin():

@@ -199,3 +199,28 @@ def test_cancel_over_a_pty():
 def test_opening_a_missing_port_is_a_clear_error():
     with pytest.raises(CS2000Error, match="cannot open serial port /dev/does-not-exist"):
         CS2000("/dev/does-not-exist")
+
+
+def test_an_open_serial_object_is_used_as_given_and_left_open():
+    import serial
+
+    loop = serial.serial_for_url("loop://")
+    cs = CS2000(loop, timeout_s=0.2)
+    assert loop.timeout == pytest.approx(0.05)  # the driver polls with short reads
+    with pytest.raises(CS2000Timeout, match="IDDR"):  # loop:// echoes; the echo is not a reply
+        cs.identify()
+    cs.close()
+    assert loop.is_open
+    loop.close()
+
+
+def test_serve_on_pty_options_and_lifecycle():
+    emulator = CS2000Emulator(lambda: radiance_for(10.0), time_scale=1.0)
+    server = serve_on_pty(emulator, time_scale=0.0)
+    assert emulator.time_scale == 0.0
+    assert "serving" in repr(server) and not server.vanished
+    server.vanish()
+    assert server.vanished
+    server.close()
+    server.close()  # idempotent
+    assert "closed" in repr(server) and server.error is None
