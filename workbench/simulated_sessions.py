@@ -9,16 +9,17 @@ end-to-end path through the real driver; this is the generator for diagnostics
 tests, benchmarks and demos, where hundreds of sessions with hidden effects
 are needed.
 
-Noise model (per measurement): the emulator's per-wavelength multiplicative
-noise (0.2 %) and absolute floor, plus a common-mode gain noise of
-``repeatability`` (0.1 % by default; the CS-2000's specified luminance
-repeatability is 0.15 % 2σ for bright stimuli).
+Noise model: the emulator's own (:func:`instruments.cs2000.instrument_noise`):
+per-wavelength multiplicative noise (0.2 %), an absolute floor, and a
+whole-spectrum gain noise of ``repeatability`` per measurement (0.1 % by
+default; the CS-2000's specified luminance repeatability is 0.15 % 2σ).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from instruments.cs2000 import instrument_noise
 from instruments.headset import SimulatedHeadset, radiance_to_XYZ
 from workbench.measurement.plans import MeasurementPlan, measurement_plan
 from workbench.measurement.simulation import InstrumentTimingModel
@@ -27,10 +28,7 @@ from workbench.session import Session
 __all__ = ["DEFAULT_REPEATABILITY", "simulate_session", "random_effect_magnitude"]
 
 DEFAULT_REPEATABILITY = 0.001
-"""Common-mode (whole-spectrum) relative noise of one measurement."""
-
-_RELATIVE_NOISE = 0.002  # per wavelength, as the emulator's default
-_NOISE_FLOOR = 2e-8  # W·sr⁻¹·m⁻²·nm⁻¹, as the emulator's default (1° field)
+"""Whole-spectrum relative noise of one measurement (the emulator's default)."""
 
 
 _TIMING = {}
@@ -85,9 +83,7 @@ def simulate_session(effects: dict | None = None, seed: int = 0, *,
     headset.session_length_s = float(t_end[-1])
     spectra = np.stack([headset.radiance(rgb[i], float(t_end[i])) for i in range(len(rgb))])
     rng = np.random.default_rng([seed, 7411])
-    spectra = spectra * (1.0 + _RELATIVE_NOISE * rng.standard_normal(spectra.shape))
-    spectra = spectra * (1.0 + repeatability * rng.standard_normal((len(rgb), 1)))
-    spectra = spectra + _NOISE_FLOOR * rng.standard_normal(spectra.shape)
+    spectra = instrument_noise(spectra, rng, repeatability=repeatability)
     return Session(kind=kinds, rgb=rgb, XYZ=radiance_to_XYZ(spectra), t_s=t_end,
                    wavelengths=headset.wavelengths if keep_spectra else None,
                    spectra=spectra if keep_spectra else None,

@@ -28,6 +28,7 @@ from instruments.cs2000.emulator import (
     GarbageFault,
     TimeoutFault,
     VanishFault,
+    instrument_noise,
 )
 from instruments.cs2000.protocol import (
     AngleKnobError,
@@ -74,6 +75,7 @@ __all__ = [
     "TimeoutFault",
     "GarbageFault",
     "VanishFault",
+    "instrument_noise",
     "PtyServer",
     "serve_on_pty",
     # errors

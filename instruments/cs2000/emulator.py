@@ -26,7 +26,9 @@ the luminance to the 242 s limit at the floor (0.003 cd/m² at 1°, 0.075 at
 modes take twice the set integration time plus 1 s. ``ttt`` is reported as
 the real instrument would (002–242) whatever the time scale.
 
-Instrument noise: multiplicative (``relative_noise``, 0.2 % by default) and
+Instrument noise (:func:`instrument_noise`): a whole-spectrum gain noise per
+measurement (``repeatability``, 0.1 % by default), a multiplicative noise per
+wavelength (``relative_noise``, 0.2 % by default) and
 an absolute floor (``noise_floor``, W·sr⁻¹·m⁻²·nm⁻¹), drawn from a generator
 seeded with ``seed``. Over range (ER10) above the angle's maximum luminance
 (5 000 cd/m² at 1°) with the internal ND filter on or auto, ten times lower
@@ -61,6 +63,7 @@ __all__ = [
     "VanishFault",
     "Fault",
     "CS2000Emulator",
+    "instrument_noise",
 ]
 
 logger = logging.getLogger("instruments.cs2000.emulator")
@@ -234,6 +237,22 @@ class _Measurement:
     started_ok: bool = True
 
 
+def instrument_noise(radiance: np.ndarray, rng: np.random.Generator, *, relative_noise: float = 0.002,
+                     noise_floor: float = 2e-8, repeatability: float = 0.001, angle: int = 0) -> np.ndarray:
+    """Radiance as the emulated CS-2000 measures it: the noise model of :class:`CS2000Emulator`.
+
+    ``radiance`` is (401,) or (N, 401): per wavelength a multiplicative noise
+    (``relative_noise``) and an additive floor (``noise_floor`` at 1°, scaled
+    with the measuring angle's luminance range), and per measurement a
+    whole-spectrum gain noise (``repeatability``).
+    """
+    radiance = np.asarray(radiance, dtype=float)
+    floor = noise_floor * LUMINANCE_RANGE_CD_M2[angle][0] / _FLOOR_1DEG
+    gain = 1.0 + relative_noise * rng.standard_normal(radiance.shape)
+    common = 1.0 + repeatability * rng.standard_normal(radiance.shape[:-1] + (1,))
+    return radiance * gain * common + floor * rng.standard_normal(radiance.shape)
+
+
 class CS2000Emulator:
     """The CS-2000 serial protocol as a pure state machine.
 
@@ -260,6 +279,9 @@ class CS2000Emulator:
         Standard deviation of the multiplicative noise per wavelength.
     noise_floor
         Standard deviation of the additive noise, W·sr⁻¹·m⁻²·nm⁻¹ (at 1°).
+    repeatability
+        Standard deviation of a whole-spectrum gain noise per measurement
+        (the CS-2000 specifies 0.15 % 2σ luminance repeatability; default 0.1 %).
 
     Examples
     --------
@@ -281,12 +303,13 @@ class CS2000Emulator:
         angle: int = 0,
         relative_noise: float = 0.002,
         noise_floor: float = 2e-8,
+        repeatability: float = 0.001,
     ) -> None:
         if model not in (1, 2):
             raise ValueError(f"model must be 1 (CS-2000) or 2 (CS-2000A), got {model!r}")
         if angle not in LUMINANCE_RANGE_CD_M2:
             raise ValueError(f"angle must be 0 (1°), 1 (0.2°) or 2 (0.1°), got {angle!r}")
-        if relative_noise < 0 or noise_floor < 0:
+        if relative_noise < 0 or noise_floor < 0 or repeatability < 0:
             raise ValueError("noise levels must not be negative")
         self._source = radiance_source
         self.time_scale = time_scale
@@ -296,6 +319,7 @@ class CS2000Emulator:
         self._angle = angle
         self._relative_noise = float(relative_noise)
         self._noise_floor = float(noise_floor)
+        self._repeatability = float(repeatability)
         self._armed: list[_Armed] = []
         for fault in faults:
             self.inject(fault)
@@ -687,9 +711,9 @@ class CS2000Emulator:
         return 1.0, 2 * seconds + 1.0, seconds
 
     def _add_noise(self, radiance: np.ndarray) -> np.ndarray:
-        floor = self._noise_floor * LUMINANCE_RANGE_CD_M2[self._angle][0] / _FLOOR_1DEG
-        gain = 1.0 + self._relative_noise * self._rng.standard_normal(radiance.shape)
-        return radiance * gain + floor * self._rng.standard_normal(radiance.shape)
+        return instrument_noise(radiance, self._rng, relative_noise=self._relative_noise,
+                                noise_floor=self._noise_floor, repeatability=self._repeatability,
+                                angle=self._angle)
 
     def _colorimetry(self, radiance: np.ndarray) -> tuple[str, ...]:
         values: list[str] = [_fmt_e(float(radiance.sum()))]
