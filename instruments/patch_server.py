@@ -89,7 +89,9 @@ class PatchServer(socketserver.TCPServer):
     display_name : str
         What the ``hello`` reply names as the display.
     idle_timeout_s : float
-        A client silent this long is dropped.
+        A client silent this long is dropped. The workbench is silent while the
+        CS-2000 measures (up to ~4 min per dark patch, twice with an ND retry)
+        and while a run is paused, hence the 10-minute default.
 
     Examples
     --------
@@ -110,7 +112,7 @@ class PatchServer(socketserver.TCPServer):
         port: int = 0,
         *,
         display_name: str = "reference patch server",
-        idle_timeout_s: float = 60.0,
+        idle_timeout_s: float = 600.0,
     ):
         self.present = present
         self.display_name = display_name
@@ -192,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--host", default="127.0.0.1", help="address to listen on (default: loopback)")
     parser.add_argument("--port", type=int, required=True, help="TCP port (0: any free port, printed)")
-    parser.add_argument("--idle-timeout", type=float, default=60.0, metavar="S",
+    parser.add_argument("--idle-timeout", type=float, default=600.0, metavar="S",
                         help="drop a client silent for S seconds (default 60)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")

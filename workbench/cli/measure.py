@@ -3,7 +3,8 @@
 ::
 
     vr-workbench measure (--simulate [--effect ID[:MAGNITUDE]]... [--time-scale S] | --port DEVICE)
-                         [--display simulated|tcp:HOST:PORT] [--plan paper|quick | --plan-file FILE]
+                         [--display simulated|window[:SCREEN]|tcp:HOST:PORT]
+                         [--plan paper|quick | --plan-file FILE]
                          [--seed N] --out DIR [--resume]
 
 Writes ``DIR/journal.jsonl`` as it goes (one fsynced line per patch), then
@@ -19,15 +20,25 @@ pseudo-terminal, and the real driver talks to that. The journal's times are
 then the instrument's modelled times; ``--time-scale`` only sets how long the
 emulator makes the run wait (0: not at all, 1: real timing). ``--seed`` seeds
 the validation colours and the instrument noise.
+
+``--display`` says where the patches are shown: ``simulated`` (the simulated
+headset; the default with ``--simulate``), ``window[:SCREEN]`` (a full-screen
+Qt window on screen SCREEN, by default the last screen, which is the headset
+in extended mode; the measurement then runs off the GUI thread) or
+``tcp:HOST:PORT`` (a VR application speaking the patch protocol of
+:mod:`instruments.patch_display`). With ``--simulate``, patches shown in a
+window or a VR application are also shown to the simulated headset, which is
+what the emulator measures.
 """
 
 from __future__ import annotations
 
+import importlib
 import secrets
 import signal
 import sys
 import threading
-from contextlib import ExitStack
+from contextlib import ExitStack, contextmanager
 
 from tqdm import tqdm
 
@@ -73,8 +84,10 @@ def register(subparsers) -> None:
                              f"{', '.join(HEADSET_EFFECTS)}")
     parser.add_argument("--time-scale", type=float, default=0.0, metavar="S",
                         help="with --simulate: fraction of real instrument timing to wait (default 0)")
-    parser.add_argument("--display", metavar="simulated|tcp:HOST:PORT",
-                        help="where patches are shown (default: simulated with --simulate)")
+    parser.add_argument("--display", metavar="simulated|window[:SCREEN]|tcp:HOST:PORT",
+                        help="where patches are shown: the simulated headset (default with --simulate), a "
+                             "full-screen window on screen SCREEN (default: the last, i.e. the headset in "
+                             "extended mode), or a VR application's patch server")
     plans = parser.add_mutually_exclusive_group()
     plans.add_argument("--plan", choices=sorted(MEASUREMENT_PLANS), help="built-in plan (default paper)")
     plans.add_argument("--plan-file", metavar="FILE", help="CSV plan with columns kind,r,g,b")
@@ -87,7 +100,10 @@ def register(subparsers) -> None:
 
 
 def parse_display(text: str | None, simulate: bool) -> tuple[str, tuple]:
-    """``("simulated", ())`` or ``("tcp", (host, port))`` from ``--display``.
+    """``("simulated", ())``, ``("window", (screen,))`` or ``("tcp", (host, port))`` from ``--display``.
+
+    ``screen`` is the screen index given as ``window:SCREEN``, or ``None``
+    for plain ``window`` (the last screen).
 
     Raises
     ------
@@ -97,18 +113,23 @@ def parse_display(text: str | None, simulate: bool) -> tuple[str, tuple]:
     if text is None:
         if simulate:
             return "simulated", ()
-        raise InputError("--port needs --display tcp:HOST:PORT (the VR application's patch server)")
+        raise InputError("--port needs --display tcp:HOST:PORT (the VR application's patch server) "
+                         "or --display window[:SCREEN] (a full-screen window, e.g. on a headset in extended mode)")
     if text == "simulated":
         if not simulate:
             raise InputError("--display simulated needs --simulate: a real CS-2000 cannot measure the "
-                             "simulated headset; use --display tcp:HOST:PORT")
+                             "simulated headset; use --display window[:SCREEN] or tcp:HOST:PORT")
         return "simulated", ()
-    kind, _, rest = text.partition(":")
+    kind, colon, rest = text.partition(":")
+    if kind == "window" and not colon:
+        return "window", (None,)
+    if kind == "window" and rest.isdigit():
+        return "window", (int(rest),)
     host, _, port = rest.rpartition(":")
     if kind == "tcp" and host and port.isdigit() and 0 < int(port) < 65536:
         return "tcp", (host, int(port))
     raise InputError(f"--display {text!r} is not understood; use simulated or tcp:HOST:PORT "
-                     "(e.g. tcp:127.0.0.1:47800)")
+                     "(e.g. tcp:127.0.0.1:47800), or window[:SCREEN] (e.g. window:1; screens count from 0)")
 
 
 def _effects(texts: list) -> dict:
@@ -144,31 +165,41 @@ def _run(args) -> int:
         effects = settings.get("effects", effects) if args.simulate else effects
     run_plan = plan if journal is None else journal.header.plan
 
-    with ExitStack() as stack:
-        simulation = None
-        if args.simulate:
-            simulation = stack.enter_context(open_simulated_instrument(
-                effects,
-                seed=run_plan.seed,
-                time_scale=args.time_scale,
-                clock_offset_s=0.0 if journal is None else journal.session_end_s(),
-                plan=run_plan,
-                session_length_s=settings.get("session_length_s"),
-            ))
-            settings = {**settings, "effects": effects, "time_scale": args.time_scale,
-                        "session_length_s": simulation.headset.session_length_s}
-        display = _open_display(stack, display_kind, display_address, simulation)
-        try:
-            meter = stack.enter_context(CS2000(simulation.server.port if simulation else args.port,
-                                               timeout_s=_INSTRUMENT_TIMEOUT_S))
-        except CS2000Error as error:
-            raise WorkbenchError(f"cannot use the CS-2000 on {args.port or 'the emulator'}: {error}") from None
-        options = {"clock": (lambda header, journal: simulation.clock)} if simulation else {}
-        if journal is None:
-            run = MeasurementRun.start(args.out, run_plan, display, meter, settings=settings, **options)
-        else:
-            run = MeasurementRun.resume_session(args.out, display, meter, plan=plan, **options)
-        summary = _drive(run)
+    ctrl_c = _CtrlCCancels()
+
+    def measure_on(window_display=None):
+        """The measurement itself; in a worker thread when ``window_display`` (the patch window) is given."""
+        run_settings = settings
+        with ExitStack() as stack:
+            simulation = None
+            if args.simulate:
+                simulation = stack.enter_context(open_simulated_instrument(
+                    effects,
+                    seed=run_plan.seed,
+                    time_scale=args.time_scale,
+                    clock_offset_s=0.0 if journal is None else journal.session_end_s(),
+                    plan=run_plan,
+                    session_length_s=run_settings.get("session_length_s"),
+                ))
+                run_settings = {**run_settings, "effects": effects, "time_scale": args.time_scale,
+                                "session_length_s": simulation.headset.session_length_s}
+            display = _open_display(stack, display_kind, display_address, simulation, window_display)
+            try:
+                meter = stack.enter_context(CS2000(simulation.server.port if simulation else args.port,
+                                                   timeout_s=_INSTRUMENT_TIMEOUT_S))
+            except CS2000Error as error:
+                raise WorkbenchError(f"cannot use the CS-2000 on {args.port or 'the emulator'}: {error}") from None
+            options = {"clock": (lambda header, journal: simulation.clock)} if simulation else {}
+            if journal is None:
+                run = MeasurementRun.start(args.out, run_plan, display, meter, settings=run_settings, **options)
+            else:
+                run = MeasurementRun.resume_session(args.out, display, meter, plan=plan, **options)
+            return _drive(run, ctrl_c)
+
+    if display_kind == "window":
+        summary = _measure_in_patch_window(display_address[0], measure_on, ctrl_c)
+    else:
+        summary = measure_on()
     print(f"measure: {summary.one_line('simulated' if args.simulate else 'session')}; "
           f"wrote {', '.join(str(p) for p in summary.outputs)}")
     if summary.status == "cancelled":
@@ -192,22 +223,86 @@ def _check_resume_settings(journal, args, effects: dict) -> None:
         )
 
 
-def _open_display(stack: ExitStack, kind: str, address: tuple, simulation):
+def _open_display(stack: ExitStack, kind: str, address: tuple, simulation, window_display=None):
+    """The patch display for ``--display``; ``window_display`` is the patch window's, opened by the caller."""
     if kind == "simulated":
         return SimulatedPatchDisplay(simulation.headset)
-    host, port = address
-    try:
-        tcp = stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S, client="vr-workbench"))
-    except PatchDisplayError as error:
-        raise WorkbenchError(str(error)) from None
+    if kind == "window":
+        shown = window_display
+    else:
+        host, port = address
+        try:
+            shown = stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S, client="vr-workbench"))
+        except PatchDisplayError as error:
+            raise WorkbenchError(str(error)) from None
     # A simulated session measures the simulated headset, so it must see the patches too.
-    return MirroredPatchDisplay(tcp, SimulatedPatchDisplay(simulation.headset)) if simulation else tcp
+    return MirroredPatchDisplay(shown, SimulatedPatchDisplay(simulation.headset)) if simulation else shown
 
 
-def _drive(run: MeasurementRun):
+def _measure_in_patch_window(screen_index: int | None, measure_on, ctrl_c: _CtrlCCancels):
+    """``measure_on(display)`` in a worker thread while the main thread runs a full-screen patch window."""
+    # Imported here, at the CLI edge, and only when --display window is asked for: the science and
+    # the CLI must not import Qt (an import-linter contract says so), and the window is opt-in.
+    try:
+        measure_window = importlib.import_module("workbench.gui.measure_window")
+    except ImportError as error:
+        raise WorkbenchError(f"--display window needs Qt (PySide6), which cannot be loaded here ({error}); "
+                             "install PySide6-Essentials, or use --display tcp:HOST:PORT") from None
+    try:
+        with ctrl_c.installed():
+            return measure_window.run_with_patch_window(screen_index, measure_on, timeout_s=_DISPLAY_TIMEOUT_S)
+    except measure_window.PatchWindowUnavailableError as error:
+        raise WorkbenchError(f"--display window: Qt cannot open a window here ({error}); run the command in "
+                             "a desktop session on the computer the headset is attached to, or show the "
+                             "patches in a VR application with --display tcp:HOST:PORT") from None
+
+
+class _CtrlCCancels:
+    """Ctrl-C (SIGINT) cancels the measurement run cleanly, whichever thread drives it.
+
+    Python runs signal handlers in the main thread only; the run may be driven
+    by a worker (``--display window``) and may not exist yet when Ctrl-C comes,
+    in which case it is cancelled as soon as it is :meth:`watch`-ed.
+    """
+
+    def __init__(self):
+        self.pressed = False
+        self._run: MeasurementRun | None = None
+
+    def __call__(self, signum, frame) -> None:
+        self.pressed = True
+        run = self._run
+        if run is not None:
+            run.cancel()
+
+    def watch(self, run: MeasurementRun) -> None:
+        """Cancel ``run`` on Ctrl-C (at once if Ctrl-C already came)."""
+        self._run = run
+        if self.pressed:
+            run.cancel()
+
+    @contextmanager
+    def installed(self):
+        """Handle SIGINT while in this block (only in the main thread; elsewhere nothing changes)."""
+        if threading.current_thread() is not threading.main_thread():
+            yield self
+            return
+        previous = signal.signal(signal.SIGINT, self)
+        try:
+            yield self
+        finally:
+            signal.signal(signal.SIGINT, previous)
+
+
+def _drive(run: MeasurementRun, ctrl_c: _CtrlCCancels):
     """Iterate the run with a progress bar; Ctrl-C cancels the measurement cleanly."""
-    in_main_thread = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, lambda *_: run.cancel()) if in_main_thread else None
+    ctrl_c.watch(run)
+    with ctrl_c.installed():  # in the main thread; off it, the caller's handler reaches the run
+        return _show_progress(run)
+
+
+def _show_progress(run: MeasurementRun):
+    """Iterate the run with a progress bar on stderr; returns the run's summary."""
     bar = tqdm(total=len(run.plan), unit="patch", file=sys.stderr, disable=not sys.stderr.isatty(),
                dynamic_ncols=True)
     run.on_countdown = lambda remaining, total: bar.set_postfix_str(f"{remaining:.0f} s left of {total:.0f} s")
@@ -226,6 +321,4 @@ def _drive(run: MeasurementRun):
                 return event.summary
     finally:
         bar.close()
-        if in_main_thread:
-            signal.signal(signal.SIGINT, previous)
     raise AssertionError("a measurement run ended without RunFinished")
