@@ -25,6 +25,7 @@ COMMAND_MODULES = (
     "workbench.cli.reproduce",
     "workbench.cli.diagnose",
     "workbench.cli.measure",
+    "workbench.cli.ishihara",
 )
 
 
