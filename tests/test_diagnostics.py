@@ -143,3 +143,11 @@ def test_report_is_self_contained_html(tmp_path):
     assert text.count("data:image/png;base64,") == 5
     assert "tone-curve-shape" in text and "temporal-drift" in text
     assert "http://" not in text and "https://" not in text  # nothing fetched when opened
+
+
+def test_diagnose_benchmark_reports_its_fields():
+    result = subprocess.run([sys.executable, "-m", "workbench", "bench", "diagnose", "--repeats",
+                             "1", "--json"], capture_output=True, text=True, check=True, timeout=300)
+    document = json.loads(result.stdout)
+    assert document["measurements"] == 214
+    assert {"wall_s_median", "in_process_s", "goal_s"} <= set(document)

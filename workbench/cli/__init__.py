@@ -23,6 +23,8 @@ __all__ = ["COMMAND_MODULES", "build_parser", "main"]
 COMMAND_MODULES = (
     "workbench.cli.illuminants",
     "workbench.cli.reproduce",
+    "workbench.cli.bench",
+    "workbench.cli.relight",
     "workbench.cli.diagnose",
     "workbench.cli.measure",
     "workbench.cli.ishihara",

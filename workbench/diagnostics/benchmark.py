@@ -13,12 +13,38 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
-__all__ = ["benchmark_diagnose"]
+__all__ = ["DiagnoseBenchmark", "benchmark_diagnose"]
+
+GOAL_S = 2.0
 
 
-def benchmark_diagnose(repeats: int = 5) -> dict:
+@dataclass(frozen=True)
+class DiagnoseBenchmark:
+    measurements: int
+    repeats: int
+    wall_s_median: float
+    wall_s_min: float
+    wall_s_max: float
+    in_process_s: float
+    python_plus_import_colour_s: float
+    goal_s: float = GOAL_S
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+    def summary(self) -> str:
+        verdict = "meets" if self.wall_s_median < self.goal_s else "misses"
+        return (f"diagnose on {self.measurements} measurements: {self.wall_s_median:.2f} s wall "
+                f"(median of {self.repeats}; min {self.wall_s_min:.2f}, max {self.wall_s_max:.2f}) "
+                f"including interpreter start-up, {verdict} the {self.goal_s:g} s goal; the "
+                f"diagnosis itself takes {1000 * self.in_process_s:.0f} ms, Python + importing "
+                f"colour-science {self.python_plus_import_colour_s:.2f} s")
+
+
+def benchmark_diagnose(repeats: int = 5) -> DiagnoseBenchmark:
     """Wall-clock seconds of ``diagnose`` runs (each in a new interpreter)."""
     from workbench.diagnostics import diagnose
     from workbench.session import write_session_csv
@@ -39,13 +65,7 @@ def benchmark_diagnose(repeats: int = 5) -> dict:
         started = time.perf_counter()
         subprocess.run([sys.executable, "-c", "import colour"], check=True, capture_output=True)
         import_colour = time.perf_counter() - started
-    return {
-        "measurements": len(session),
-        "repeats": repeats,
-        "wall_s_median": statistics.median(walls),
-        "wall_s_min": min(walls),
-        "wall_s_max": max(walls),
-        "in_process_s": in_process,
-        "python_plus_import_colour_s": import_colour,
-        "goal_s": 2.0,
-    }
+    return DiagnoseBenchmark(measurements=len(session), repeats=repeats,
+                             wall_s_median=statistics.median(walls), wall_s_min=min(walls),
+                             wall_s_max=max(walls), in_process_s=in_process,
+                             python_plus_import_colour_s=import_colour)

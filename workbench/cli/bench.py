@@ -1,0 +1,105 @@
+"""``bench NAME``: timing benchmarks (design §7: timing goals live here, never in unit tests).
+
+:data:`BENCHMARKS` maps a name to a :class:`Benchmark`; adding one is one line
+in it. Each benchmark adds its own options and returns a result with
+``to_json()`` and ``summary()``; ``--json`` prints the former.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+
+__all__ = ["Benchmark", "BENCHMARKS", "register"]
+
+
+@dataclass(frozen=True)
+class Benchmark:
+    """A benchmark the ``bench`` command can run.
+
+    Attributes
+    ----------
+    help : str
+        One line for ``bench --help``.
+    add_arguments : callable
+        ``add_arguments(parser)`` adds the benchmark's options.
+    run : callable
+        ``run(args)`` → a result with ``to_json() -> dict`` and ``summary() -> str``.
+    """
+
+    help: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[argparse.Namespace], object]
+
+
+def _relight_arguments(parser: argparse.ArgumentParser) -> None:
+    from workbench.hyperspectral.basis import DEFAULT_TARGET_MAX_DE00
+
+    parser.add_argument("--size", type=int, default=1024,
+                        help="cube side in texels (default 1024: 1024×1024×101 bands, ~420 MB)")
+    parser.add_argument("--repeats", type=int, default=20, help="timed relights per source")
+    parser.add_argument("--full-band-repeats", type=int, default=3,
+                        help="timed full-band runs per source")
+    parser.add_argument("--target", type=float, default=DEFAULT_TARGET_MAX_DE00,
+                        help="max ΔE00 (held-out, vs full band) K is chosen for "
+                             f"(default {DEFAULT_TARGET_MAX_DE00})")
+    parser.add_argument("--kernel", default="auto", help="relight kernel: auto, numba or numpy")
+    parser.add_argument("--profile", help="a .vrprofile.json: its display model "
+                                          "(default: ideal sRGB)")
+
+
+def _relight_run(args: argparse.Namespace):
+    from workbench.hyperspectral.benchmark import benchmark_relight
+
+    display = None
+    if args.profile:
+        from workbench.profile import load_profile
+
+        display = load_profile(args.profile).display_model()
+    return benchmark_relight(args.size, repeats=args.repeats,
+                             full_band_repeats=args.full_band_repeats, display=display,
+                             kernel=args.kernel, target_max_dE00=args.target)
+
+
+def _diagnose_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--repeats", type=int, default=5, help="timed runs (each a new interpreter)")
+
+
+def _diagnose_run(args: argparse.Namespace):
+    from workbench.diagnostics.benchmark import benchmark_diagnose
+
+    return benchmark_diagnose(args.repeats)
+
+
+BENCHMARKS: dict[str, Benchmark] = {
+    "relight": Benchmark("level-2 relight: spectral-basis kernel vs the full-band path",
+                         _relight_arguments, _relight_run),
+    "diagnose": Benchmark("diagnose on a 214-measurement session, wall time with start-up",
+                          _diagnose_arguments, _diagnose_run),
+}
+"""Benchmark name → :class:`Benchmark`."""
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("bench", help="timing benchmarks",
+                                   description="Timing benchmarks; --json for machine-readable "
+                                               "output.")
+    names = parser.add_subparsers(dest="benchmark", metavar="BENCHMARK", required=True)
+    for name, benchmark in BENCHMARKS.items():
+        sub = names.add_parser(name, help=benchmark.help, description=benchmark.help)
+        sub.add_argument("--json", action="store_true", help="machine-readable output")
+        benchmark.add_arguments(sub)
+        sub.set_defaults(handler=_run, bench=benchmark)
+
+
+def _run(args) -> int:
+    result = args.bench.run(args)
+    if args.json:
+        json.dump(result.to_json(), sys.stdout, indent=1)
+        print()
+    else:
+        print(result.summary())
+    return 0
