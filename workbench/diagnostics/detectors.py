@@ -25,6 +25,7 @@ from workbench.diagnostics.evidence import (
     DriftCorrection,
     channel_sweeps,
     estimate_drift,
+    fit_chromaticity_drift,
     xy_of,
 )
 from workbench.display.tone_curves import bic, fit_tone_curve
@@ -144,21 +145,14 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
                           evidence, {"white_over_sum": ratio.tolist()})
 
 
-def _chromaticity_drift(sweep: ChannelSweep, min_output: float = 0.02) -> tuple[float, float]:
+def _chromaticity_drift(sweep: ChannelSweep) -> tuple[float, float]:
     """Fitted xy distance from full drive at the lowest usable level, and that level."""
-    usable = (sweep.output >= min_output) & (sweep.drive < 1.0)
-    if usable.sum() < 3:
+    fit = fit_chromaticity_drift(sweep)
+    if fit is None:
         return 0.0, 1.0
-    delta = xy_of(sweep.XYZ[usable]) - sweep.full_xy
-    u = 1.0 - sweep.drive[usable]
-    basis = np.column_stack([u, u ** 2])
-    weights = np.sqrt(sweep.output[usable])
-    coefficients, *_ = np.linalg.lstsq(basis * weights[:, None], delta * weights[:, None],
-                                       rcond=None)
-    lowest = float(sweep.drive[usable].min())
+    coefficients, lowest = fit
     u0 = 1.0 - lowest
-    predicted = u0 * coefficients[0] + u0 ** 2 * coefficients[1]
-    return float(np.hypot(*predicted)), lowest
+    return float(np.hypot(*(u0 * coefficients[0] + u0 ** 2 * coefficients[1]))), lowest
 
 
 def detect_chromaticity_shift(context: DiagnosisContext) -> DetectorResult:

@@ -17,7 +17,7 @@ from workbench.errors import InputError
 from workbench.session import Session
 
 __all__ = ["DriftCorrection", "ChannelSweep", "estimate_drift", "channel_sweeps",
-           "fit_rows", "xy_of"]
+           "fit_chromaticity_drift", "fit_rows", "xy_of", "MIN_CHROMATICITY_OUTPUT"]
 
 
 def xy_of(XYZ: np.ndarray) -> np.ndarray:
@@ -121,3 +121,26 @@ def channel_sweeps(session: Session, black: np.ndarray) -> tuple[ChannelSweep, .
         sweeps.append(ChannelSweep(channel=channel, drive=unique / 255.0, XYZ=mean_XYZ,
                                    full_XYZ=mean_XYZ[-1]))
     return tuple(sweeps)
+
+
+MIN_CHROMATICITY_OUTPUT = 0.02
+"""Sweep points below this normalized output are too dim for a reliable xy."""
+
+
+def fit_chromaticity_drift(sweep: ChannelSweep) -> tuple[np.ndarray, float] | None:
+    """Fit ``Δxy(d) = a₁(1 − d) + a₂(1 − d)²`` to a black-subtracted sweep.
+
+    Points are weighted by the square root of their output and those below
+    :data:`MIN_CHROMATICITY_OUTPUT` are left out. Returns the (2, 2)
+    coefficients ([a₁, a₂] × [x, y]) and the lowest drive used, or None when
+    fewer than three points are usable.
+    """
+    usable = (sweep.output >= MIN_CHROMATICITY_OUTPUT) & (sweep.drive < 1.0)
+    if usable.sum() < 3:
+        return None
+    delta = xy_of(sweep.XYZ[usable]) - sweep.full_xy
+    u = 1.0 - sweep.drive[usable]
+    weights = np.sqrt(sweep.output[usable])
+    coefficients, *_ = np.linalg.lstsq(np.column_stack([u, u ** 2]) * weights[:, None],
+                                       delta * weights[:, None], rcond=None)
+    return coefficients, float(sweep.drive[usable].min())

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from workbench.diagnostics.detectors import DiagnosisContext, tone_data
-from workbench.diagnostics.evidence import ChannelSweep, xy_of
+from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift, xy_of
 from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
 from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_tone_curve
 
@@ -51,16 +51,11 @@ def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteract
     return drive, outputs
 
 
-def _chromaticity_term(sweep: ChannelSweep, min_output: float = 0.02) -> ChromaticityDrift | None:
-    usable = (sweep.output >= min_output) & (sweep.drive < 1.0)
-    if usable.sum() < 3:
+def _chromaticity_term(sweep: ChannelSweep) -> ChromaticityDrift | None:
+    fit = fit_chromaticity_drift(sweep)
+    if fit is None:
         return None
-    delta = xy_of(sweep.XYZ[usable]) - sweep.full_xy
-    u = 1.0 - sweep.drive[usable]
-    weights = np.sqrt(sweep.output[usable])
-    coefficients, *_ = np.linalg.lstsq(np.column_stack([u, u ** 2]) * weights[:, None],
-                                       delta * weights[:, None], rcond=None)
-    return ChromaticityDrift(tuple(tuple(float(v) for v in row) for row in coefficients))
+    return ChromaticityDrift(tuple(tuple(float(v) for v in row) for row in fit[0]))
 
 
 def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
