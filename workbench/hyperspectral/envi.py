@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench.errors import SpectrumFileError
-from workbench.hyperspectral.atomic import atomic_output
+from workbench.fileio import atomic_output
 from workbench.hyperspectral.cube import ReflectanceCube
 
 __all__ = ["read_cube_envi", "write_cube_envi", "ENVI_DATA_SUFFIX"]

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench.errors import SpectrumFileError
-from workbench.hyperspectral.atomic import atomic_output
+from workbench.fileio import atomic_output
 from workbench.hyperspectral.cube import ReflectanceCube
 from workbench.hyperspectral.variables import (
     CUBE_VARIABLE,

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench.errors import InputError, SpectrumFileError
-from workbench.hyperspectral.atomic import atomic_output
+from workbench.fileio import atomic_output
 from workbench.hyperspectral.cube import ReflectanceCube
 from workbench.hyperspectral.hdf5 import read_hdf5_cube
 from workbench.hyperspectral.variables import (

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench.errors import InputError
-from workbench.hyperspectral.atomic import atomic_output
+from workbench.fileio import atomic_output
 
 __all__ = ["PNG_SIGNATURE", "write_png_rgb8", "png_chunks"]
 

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import csv
 import math
-import tempfile
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
@@ -23,7 +22,7 @@ import numpy as np
 
 from workbench.colorimetry import WORKING_SHAPE, as_spectral_distribution
 from workbench.errors import SpectrumFileError
-from workbench.fileio import atomic_writer
+from workbench.fileio import atomic_output, atomic_writer
 from workbench.illuminants.source import Illuminant
 
 __all__ = [
@@ -159,13 +158,9 @@ def write_spectrum_tm27(sd: colour.SpectralDistribution, path, *, description: s
         reflection_geometry="other", transmission_geometry="other",
         bandwidth_FWHM=float(np.min(np.diff(sd.wavelengths))), bandwidth_corrected=False,
         data=np.asarray(sd.values), domain=np.asarray(sd.wavelengths))
-    with tempfile.TemporaryDirectory() as folder:
-        # colour-science writes by path: write aside, then move the bytes in atomically
-        document.path = str(Path(folder) / "spectrum.xml")  # set after construction: a path
-        document.write()                                      # given to it is read at once
-        content = Path(document.path).read_bytes()
-    with atomic_writer(path, "wb") as handle:
-        handle.write(content)
+    with atomic_output(path) as (staged,):  # colour-science writes by path
+        document.path = str(staged)  # set after construction: a path given to it is read at once
+        document.write()
     return Path(path)
 
 
