@@ -66,8 +66,11 @@ def _print_text(diagnosis) -> None:
     print(f"baseline  {base['model']}: {figures(base)}")
     if not result["findings"]:
         print("findings  none beyond noise: the paper's model is adequate for this display")
+    terms = {t["effect"]: t for t in ext["terms"]}
     for i, finding in enumerate(result["findings"], start=1):
         print(f"finding {i} {finding['effect']} (score {finding['score']:.1f}): {finding['evidence']}")
+        term = terms[finding["effect"]]
+        print(f"          → {term['term']}, fitted on {term['fitted_on']}")
     print(f"extended  {ext['model']}: {figures(ext)}  [{ext['protocol']}]")
     if result["fallback"] is not None:
         print(f"fallback  {result['fallback']['model']}: {figures(result['fallback'])}  "

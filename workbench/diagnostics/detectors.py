@@ -198,7 +198,8 @@ def detect_tone_curve_shape(context: DiagnosisContext) -> DetectorResult:
         per_channel.append((best_gap, best_delta, best_form))
     worst = int(np.argmax([gap for gap, _, _ in per_channel]))
     gap, delta_bic, form = per_channel[worst]
-    evidence = (f"the {CHANNEL_NAMES[worst]} sweep is not a power law: a {form} curve fits it "
+    article = "an" if form[0] in "aeiou" else "a"
+    evidence = (f"the {CHANNEL_NAMES[worst]} sweep is not a power law: {article} {form} curve fits it "
                 f"better by ΔBIC {delta_bic:.0f} and departs from the best power law by up to "
                 f"{100 * gap:.1f} % of full output" if gap > 0 else
                 "every sweep is fitted by a power law within noise")

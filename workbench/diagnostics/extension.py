@@ -23,7 +23,7 @@ from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift,
 from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
 from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_tone_curve
 
-__all__ = ["TERMS", "fit_extended", "grey_channel_outputs"]
+__all__ = ["TERMS", "fitted_on", "fit_extended", "grey_channel_outputs"]
 
 TERMS = {
     "temporal-drift": "drift correction from the white references",
@@ -33,6 +33,20 @@ TERMS = {
     "channel-interaction": "load-dependent channel interaction",
 }
 """Effect id → the model term that answers it."""
+
+
+def fitted_on(effect: str, session) -> str:
+    """Which rows the term answering ``effect`` was fitted on (never validation rows)."""
+    n_white = int(session.mask("white").sum())
+    n_grey = int(session.mask("grey").sum())
+    sweeps = int(session.mask("ramp-r", "ramp-g", "ramp-b").sum())
+    return {
+        "temporal-drift": f"the {n_white} white references over time",
+        "black-offset": "the black (0, 0, 0) measurement",
+        "tone-curve-shape": f"the {sweeps} sweep points" + (f" and {n_grey} greys" if n_grey else ""),
+        "chromaticity-shift": f"the chromaticity of the {sweeps} sweep points",
+        "channel-interaction": f"the {n_white} white references against the full-drive primaries",
+    }[effect]
 
 
 def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteraction | None = None):

@@ -134,8 +134,11 @@ def _score_row(label: str, model: str, score) -> str:
 def render_report(diagnosis: Diagnosis) -> str:
     """The report as one HTML string."""
     findings = diagnosis.findings
+    terms = {t["effect"]: t for t in diagnosis.to_json()["extended"]["terms"]}
     items = "".join(
-        f"<li><b>{html.escape(f.effect)}</b> (score {f.score:.1f}): {html.escape(f.evidence)}</li>"
+        f"<li><b>{html.escape(f.effect)}</b> (score {f.score:.1f}): {html.escape(f.evidence)}"
+        f"<br><small>extended with {html.escape(terms[f.effect]['term'])}, fitted on "
+        f"{html.escape(terms[f.effect]['fitted_on'])}</small></li>"
         for f in findings) or "<li>None beyond noise: the paper's model is adequate.</li>"
     not_found = "".join(
         f"<li>{html.escape(r.effect)} (statistic {r.statistic:.4g}, threshold {r.threshold:.4g}): "

@@ -16,7 +16,7 @@ import numpy as np
 
 from workbench.colorimetry import delta_E2000
 from workbench.diagnostics.detectors import DetectorResult, DiagnosisContext, run_detectors
-from workbench.diagnostics.extension import TERMS, fit_extended
+from workbench.diagnostics.extension import TERMS, fit_extended, fitted_on
 from workbench.display import DisplayModel, GammaMatrixDisplay
 from workbench.display.residual_lut import fit_residual_lut
 from workbench.errors import InputError
@@ -91,7 +91,9 @@ class Diagnosis:
                           "statistic": r.statistic, "threshold": r.threshold}
                          for r in self.findings],
             "extended": {"model": self.extended.describe(), "protocol": self.protocol,
-                         "terms": [TERMS[r.effect] for r in self.findings],
+                         "terms": [{"effect": r.effect, "term": TERMS[r.effect],
+                                    "fitted_on": fitted_on(r.effect, self.context.fit)}
+                                   for r in self.findings],
                          "validation": None if ext is None else ext.to_json()},
             "gain": {"mean_dE00_reduction_pct": self.gain_pct},
             "fallback": None if self.fallback_dE is None else {
