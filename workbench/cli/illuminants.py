@@ -56,7 +56,11 @@ def _list(args) -> int:
             for record in records:
                 print(f"{record['id']:<40} {record['kind']:<12} {record['name']}")
         return 0
-    metrics = [illuminant_metrics(get_illuminant(i)) for i in ids]
+    from tqdm import tqdm
+
+    metrics = [illuminant_metrics(get_illuminant(i))
+               for i in tqdm(ids, desc="metrics", unit="source", file=sys.stderr, leave=False,
+                             disable=not sys.stderr.isatty())]
     if args.json:
         json.dump([m.to_json() for m in metrics], sys.stdout, indent=1)
         print()
