@@ -39,9 +39,11 @@ __all__ = [
     "Level2Texture",
     "ErrorTable",
     "light_colour",
+    "light_colour_from_XYZ",
     "engine_render",
     "level1_render",
     "level2_texture",
+    "level2_albedo8",
     "target_dac",
     "error_table",
     "authored_srgb8",
@@ -78,14 +80,26 @@ class LightColour:
         return srgb_decode(self.rgb8 / 255.0)
 
 
+def light_colour_from_XYZ(XYZ, display: DisplayModel) -> LightColour:
+    """The level-1 light colour whose perfect diffuser has ``XYZ_t = XYZ`` on ``display``.
+
+    ``light_rgb8 = display_inverse(XYZ_t(ρ=1))`` (design §2, level 1), with
+    ``in_gamut`` False where the display clips it. ``XYZ`` is on the display's
+    scale (``Y = k · Y_white``), e.g. the sum over bands of a source's
+    relative-colorimetry weights.
+    """
+    XYZ = np.asarray(XYZ, dtype=np.float64)
+    dac = display.inverse(XYZ)
+    return LightColour(XYZ=XYZ, dac=dac, rgb8=quantize_dac(dac),
+                       in_gamut=bool(display.in_gamut(XYZ)))
+
+
 def light_colour(illuminant, display: DisplayModel | None = None, *, k: float = DEFAULT_K,
                  observer: str = DEFAULT_OBSERVER) -> LightColour:
     """Level-1 light colour of ``illuminant`` for ``display`` (default: ideal sRGB)."""
     display = display or SRGBDisplay()
     XYZ = white_XYZ_relative(illuminant, observer, k=k, Y_white=float(display.white_XYZ[1]))
-    dac = display.inverse(XYZ)
-    return LightColour(XYZ=XYZ, dac=dac, rgb8=quantize_dac(dac),
-                       in_gamut=bool(display.in_gamut(XYZ)))
+    return light_colour_from_XYZ(XYZ, display)
 
 
 def _as_rgb8(values, what: str) -> np.ndarray:
@@ -153,15 +167,42 @@ def level2_texture(reflectances, illuminant, display: DisplayModel | None = None
     light = light_colour(illuminant, display, k=k, observer=observer)
     dac, XYZ_t = target_dac(reflectances, illuminant, display, k=k, observer=observer,
                             wavelengths=wavelengths)
-    wanted = srgb_decode(quantize_dac(dac) / 255.0)
-    light_linear = light.linear
-    dark = light_linear < LIGHT_CHANNEL_FLOOR
+    rgb8, unreachable = level2_albedo8(quantize_dac(dac), light.linear)
+    return Level2Texture(rgb8=rgb8, target_dac=dac, XYZ_t=XYZ_t, light=light,
+                         unreachable=unreachable)
+
+
+def level2_albedo8(dac_rgb8, light_linear) -> tuple[np.ndarray, np.ndarray]:
+    """The level-2 texel of design §2 for integer target DAC values under a light.
+
+    ``albedo_lin = srgb_decode(DAC_t / 255) ⊘ light_lin``, clipped to [0, 1]
+    (0 where the light channel is below :data:`LIGHT_CHANNEL_FLOOR`), then
+    encoded with the sRGB transfer function to 8 bits.
+
+    Parameters
+    ----------
+    dac_rgb8 : array_like (..., 3) of int
+        ``round(DAC_t)`` on 0..255 (:func:`workbench.display.quantize_dac`).
+    light_linear : array_like (3,)
+        The engine light colour, linear 0..1 (:attr:`LightColour.linear`).
+
+    Returns
+    -------
+    texels : ndarray (..., 3), int64
+        Texels 0..255 to upload.
+    unreachable : ndarray (...), bool
+        Texels the light cannot carry: an albedo above 1 (clipped) or a target
+        in a channel the light does not have. Per channel this depends only on
+        that channel's DAC and is non-decreasing in it.
+    """
+    light = np.asarray(light_linear, dtype=np.float64)
+    wanted = srgb_decode(np.asarray(dac_rgb8, dtype=np.float64) / 255.0)
+    dark = light < LIGHT_CHANNEL_FLOOR
     with np.errstate(divide="ignore", invalid="ignore"):
-        albedo = np.where(dark, 0.0, wanted / np.where(dark, 1.0, light_linear))
+        albedo = np.where(dark, 0.0, wanted / np.where(dark, 1.0, light))
     unreachable = np.any(albedo > 1.0 + 1e-9, axis=-1) | np.any(dark & (wanted > 0), axis=-1)
-    albedo = np.clip(albedo, 0.0, 1.0)
-    return Level2Texture(rgb8=quantize_dac(255.0 * srgb_encode(albedo)), target_dac=dac,
-                         XYZ_t=XYZ_t, light=light, unreachable=unreachable)
+    texels = quantize_dac(255.0 * srgb_encode(np.clip(albedo, 0.0, 1.0)))
+    return texels, unreachable
 
 
 def authored_srgb8(reflectances, *, wavelengths=None) -> np.ndarray:

@@ -7,6 +7,7 @@ from workbench.colorimetry import WORKING_WAVELENGTHS, delta_E2000
 from workbench.errors import InputError
 from workbench.hyperspectral import (
     ACCURACY_SOURCES,
+    BASIS_SOURCES,
     PAPER_CUBE_WAVELENGTHS,
     XYZ_band_weights,
     basis_accuracy,
@@ -91,3 +92,62 @@ def test_cube_coefficients_are_float16_planes(small_cube):
     expected = basis.coefficients(small_cube.data[7, 9])
     np.testing.assert_allclose(texture.coefficients[:, 7, 9].astype(float), expected.astype(float),
                                rtol=2e-3, atol=2e-3)
+
+
+def test_too_few_samples_to_hold_any_out_is_an_error():
+    from workbench.hyperspectral.basis import split_held_out
+
+    train, held = split_held_out(5)
+    assert len(held) == 1 and len(train) == 4 and not set(train) & set(held)
+    for count in (0, 1, 4):
+        with pytest.raises(InputError, match="at least 5"):
+            split_held_out(count)
+    ces = _at_cube_bands(ces99().reflectances)
+    with pytest.raises(InputError, match="held-out"):
+        fit_spectral_basis(ces[:4], WAVELENGTHS)
+    basis = fit_spectral_basis(ces[:4], WAVELENGTHS, held_out=ces[4:10], components=2)
+    assert basis.components == 2 and basis.held_out.samples == 6
+
+
+def test_benchmark_sets_are_disjoint_by_material():
+    from workbench.hyperspectral.benchmark import (
+        TEST_MATERIALS,
+        TRAINING_MATERIALS,
+        VALIDATION_MATERIALS,
+        held_out_material_sets,
+    )
+    from workbench.hyperspectral.materials import material_reflectances
+
+    assert len({TRAINING_MATERIALS, VALIDATION_MATERIALS, *TEST_MATERIALS}) == 4
+    seen = np.vstack([material_reflectances(TRAINING_MATERIALS, WAVELENGTHS),
+                      material_reflectances(VALIDATION_MATERIALS, WAVELENGTHS)])
+    for name in TEST_MATERIALS:
+        for spectrum in material_reflectances(name, WAVELENGTHS):
+            assert np.abs(seen - spectrum).max(axis=1).min() > 0.01, name
+    training, validation, test = held_out_material_sets(WAVELENGTHS)
+    assert set(test) == set(TEST_MATERIALS)
+    # Every training texel is a convex mixture of the training materials: inside their range.
+    training_spectra = material_reflectances(TRAINING_MATERIALS, WAVELENGTHS)
+    assert np.all(training >= training_spectra.min(axis=0) - 1e-6)
+    assert np.all(training <= training_spectra.max(axis=0) + 1e-6)
+    assert len(validation) > len(material_reflectances(VALIDATION_MATERIALS, WAVELENGTHS))
+
+
+def test_basis_accuracy_held_out_by_material():
+    """The benchmark's split: fitted on CIE 2017 samples, K chosen on the CIE 13.3 samples,
+    accurate on the ColorChecker and the NIST CQS samples, which neither step saw."""
+    from workbench.hyperspectral.benchmark import (
+        BENCHMARK_TARGET_MAX_DE00,
+        held_out_material_sets,
+    )
+
+    training, validation, test = held_out_material_sets(WAVELENGTHS)
+    basis = fit_spectral_basis(training, WAVELENGTHS, held_out=validation,
+                               target_max_dE00=BENCHMARK_TARGET_MAX_DE00,
+                               sources=tuple(dict.fromkeys(BASIS_SOURCES + ACCURACY_SOURCES)))
+    assert basis.meets_target
+    for name, reflectances in test.items():
+        accuracy = basis_accuracy(basis, reflectances, ACCURACY_SOURCES)
+        assert accuracy.samples == len(reflectances)
+        for source, value in accuracy.max_dE00.items():
+            assert value <= 0.5, (name, source, value)

@@ -235,3 +235,47 @@ def test_the_cube_itself_validates(random_cube):
         ReflectanceCube(random_cube.data[0], WAVELENGTHS, "flat")
     with pytest.raises(SpectrumFileError, match="µm"):
         ReflectanceCube(random_cube.data, WAVELENGTHS / 1000, "microns")
+
+
+@pytest.mark.parametrize("factor, problem", [("ten thousand", "is not a number"),
+                                             ("{1, 2}", "is not a number"),
+                                             ("0", "is not positive"),
+                                             ("-10000", "is not positive")])
+def test_a_bad_envi_reflectance_scale_factor_is_named(tmp_path, random_cube, factor, problem):
+    import spectral.io.envi as envi
+
+    envi.save_image(str(tmp_path / "scaled.hdr"), random_cube.data, dtype=np.float32,
+                    metadata={"wavelength": [f"{w:g}" for w in WAVELENGTHS],
+                              "reflectance scale factor": factor})
+    _expect(tmp_path / "scaled.hdr", "reflectance scale factor", problem, "10000")
+
+
+def _hdf5_with_units(path, cube, units, where):
+    with h5py.File(path, "w") as handle:
+        data = handle.create_dataset("reflectance", data=cube.data)
+        wavelengths = handle.create_dataset("wavelengths", data=WAVELENGTHS * (
+            1e-3 if units.lower() in ("um", "µm", "micrometers") else 1.0))
+        {"wavelengths": wavelengths, "cube": data, "file": handle}[where].attrs[
+            "wavelength_units" if where != "wavelengths" else "units"] = units
+    return path
+
+
+@pytest.mark.parametrize("units", ["nm", "nanometers", "Nanometres", "um", "µm", "micrometers"])
+@pytest.mark.parametrize("where", ["wavelengths", "cube", "file"])
+def test_hdf5_wavelength_units_nm_and_um(tmp_path, random_cube, units, where):
+    path = _hdf5_with_units(tmp_path / "units.h5", random_cube, units, where)
+    np.testing.assert_allclose(read_cube(path).wavelengths, WAVELENGTHS, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("units", ["Angstrom", "cm-1", "GHz", ""])
+def test_hdf5_unknown_wavelength_units_are_refused(tmp_path, random_cube, units):
+    path = _hdf5_with_units(tmp_path / "units.h5", random_cube, units, "wavelengths")
+    _expect(path, f"units = {units}'", "nm", "µm")
+
+
+def test_hdf5_cube_units_that_are_not_a_length_describe_the_data(tmp_path, random_cube):
+    path = tmp_path / "data_units.h5"
+    with h5py.File(path, "w") as handle:
+        handle.create_dataset("reflectance", data=random_cube.data).attrs["units"] = "1"
+        handle.create_dataset("wavelengths", data=WAVELENGTHS)
+    np.testing.assert_array_equal(read_cube(path).wavelengths, WAVELENGTHS)

@@ -122,6 +122,33 @@ def test_level1_texture_is_the_authored_srgb(small_cube):
     assert np.mean(texture.reshape(-1, 3) == expected) >= 0.999
 
 
+def _unfilter_png_rows(raw, height, row_bytes, pixel_bytes=3):
+    """Undo PNG scanline filters (ISO/IEC 15948 §9.2), independently of the writer."""
+    rows = np.zeros((height, row_bytes), dtype=np.int64)
+    for y in range(height):
+        kind, line = raw[y, 0], raw[y, 1:].astype(np.int64)
+        above = rows[y - 1] if y else np.zeros(row_bytes, dtype=np.int64)
+        out = rows[y]
+        for x in range(row_bytes):
+            left = out[x - pixel_bytes] if x >= pixel_bytes else 0
+            corner = above[x - pixel_bytes] if x >= pixel_bytes else 0
+            if kind == 0:
+                predictor = 0
+            elif kind == 1:
+                predictor = left
+            elif kind == 2:
+                predictor = above[x]
+            elif kind == 3:
+                predictor = (left + above[x]) // 2
+            else:
+                assert kind == 4, kind
+                p = left + above[x] - corner
+                pa, pb, pc = abs(p - left), abs(p - above[x]), abs(p - corner)
+                predictor = left if pa <= pb and pa <= pc else above[x] if pb <= pc else corner
+            out[x] = (line[x] + predictor) % 256
+    return rows
+
+
 def test_png_holds_exactly_the_texels(tmp_path, rng):
     import zlib
 
@@ -130,10 +157,132 @@ def test_png_holds_exactly_the_texels(tmp_path, rng):
     chunks = dict(png_chunks(path.read_bytes()))
     width, height = np.frombuffer(chunks[b"IHDR"][:8], ">u4")
     assert (height, width) == (7, 11)
+    assert chunks[b"IHDR"][8:10] == bytes([8, 2])                   # 8-bit truecolour
     assert chunks[b"tEXt"] == b"Comment\x00test"
-    raw = np.frombuffer(zlib.decompress(chunks[b"IDAT"]), np.uint8).reshape(7, 1 + 33)
-    assert np.all(raw[:, 0] == 1)                                   # Sub filter
-    rows = np.cumsum(raw[:, 1:].reshape(7, 11, 3).astype(np.int64), axis=1) % 256
+    # No chunk a viewer would colour-manage with: the values are the sRGB texels.
+    assert not {b"gAMA", b"cHRM", b"sRGB", b"iCCP"} & set(chunks)
+    idat = b"".join(payload for kind, payload in png_chunks(path.read_bytes()) if kind == b"IDAT")
+    raw = np.frombuffer(zlib.decompress(idat), np.uint8).reshape(7, 1 + 33)
+    assert np.all(raw[:, 0] <= 4)                                   # PNG filter types 0-4
+    rows = _unfilter_png_rows(raw, 7, 33).reshape(7, 11, 3)
     np.testing.assert_array_equal(rows, rgb)
     image = pytest.importorskip("PIL.Image")
     np.testing.assert_array_equal(np.asarray(image.open(path).convert("RGB")), rgb)
+
+
+def test_png_text_and_a_failed_write(tmp_path, rng, monkeypatch):
+    from PIL import Image
+
+    rgb = rng.integers(0, 256, (5, 4, 3)).astype(np.uint8)
+    path = write_png_rgb8(tmp_path / "t.png", rgb, {"workbench.light_rgb8": "255,218,123",
+                                                   "Description": "engine texture × light"})
+    with Image.open(path) as image:
+        assert image.text == {"workbench.light_rgb8": "255,218,123",
+                              "Description": "engine texture × light"}
+    before = path.read_bytes()
+
+    def save_that_dies(self, handle, *args, **kwargs):
+        handle.write(before[:20])
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Image.Image, "save", save_that_dies)
+    with pytest.raises(OSError):
+        write_png_rgb8(path, rgb[::-1])
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.png"]
+    with pytest.raises(InputError, match=r"\(H, W, 3\)"):
+        write_png_rgb8(tmp_path / "flat.png", rgb[..., 0])
+
+
+# --- one level-2 formula, and the texels a light cannot carry ---------------------------------
+
+
+def test_the_kernel_tables_are_the_level2_formula(rng):
+    from workbench.colour_management import level2_albedo8, light_colour
+    from workbench.hyperspectral.level2_texels import level2_texel_table, level2_unreachable_dac
+
+    for source in ("cie-d65", "cie-a"):
+        light = light_colour(get_illuminant(source).sd).linear
+        dac = rng.integers(0, 256, (5000, 3))
+        texels, unreachable = level2_albedo8(dac, light)
+        table = level2_texel_table(light)
+        np.testing.assert_array_equal(table[np.arange(3), dac], texels)
+        np.testing.assert_array_equal(np.any(dac >= level2_unreachable_dac(light), axis=-1),
+                                      unreachable)
+    # sRGB 188 is the first level above linear 0.5, 124 the first above 0.2; a channel the
+    # light does not have carries only black.
+    dark = np.array([0.5, 0.2, 0.0])
+    assert level2_unreachable_dac(dark).tolist() == [188, 124, 1]
+    assert level2_unreachable_dac(np.ones(3)).tolist() == [256, 256, 256]
+    texels, unreachable = level2_albedo8(np.array([[100, 50, 0], [100, 50, 1]]), dark)
+    assert unreachable.tolist() == [False, True] and texels[1, 2] == 0
+
+
+def test_level2_texture_uses_the_shared_formula(small_cube):
+    from workbench.colour_management import level2_albedo8, light_colour_from_XYZ
+
+    texture = level2_texture(small_cube.texels(), get_illuminant("cie-a").sd,
+                             wavelengths=small_cube.wavelengths)
+    texels, unreachable = level2_albedo8(quantize_dac(texture.target_dac), texture.light.linear)
+    np.testing.assert_array_equal(texture.rgb8, texels)
+    np.testing.assert_array_equal(texture.unreachable, unreachable)
+    again = light_colour_from_XYZ(texture.light.XYZ, SRGBDisplay())
+    assert again.rgb8.tolist() == texture.light.rgb8.tolist()
+    assert again.in_gamut == texture.light.in_gamut
+
+
+def _pure_samples_cube(name, rows, columns):
+    from workbench.hyperspectral import PAPER_CUBE_WAVELENGTHS, ReflectanceCube
+    from workbench.hyperspectral.materials import material_reflectances
+
+    spectra = material_reflectances(name, PAPER_CUBE_WAVELENGTHS)
+    return ReflectanceCube(spectra.reshape(rows, columns, -1).astype(np.float32),
+                           PAPER_CUBE_WAVELENGTHS, name)
+
+
+@pytest.fixture(scope="module")
+def ces_samples_texture():
+    cube = _pure_samples_cube("ces99", 9, 11)
+    return cube, encode_cube(cube, fit_cube_basis(cube))
+
+
+# Narrow red LEDs outside each display's gamut: the light colour loses a channel (sRGB: blue,
+# Vive: green) and is weak in another, which some orange CIE 2017 samples need more of.
+@pytest.mark.parametrize("display_id, peak, half_width, missing", [("srgb", 610, 15, 2),
+                                                                   ("vive", 620, 25, 1)])
+def test_the_kernels_count_texels_a_led_cannot_carry(ces_samples_texture, display_id, peak,
+                                                     half_width, missing):
+    import colour
+
+    from workbench.colorimetry import WORKING_SHAPE
+    from workbench.hyperspectral import relight_level2, relight_level2_full_band
+
+    cube, texture = ces_samples_texture
+    display = DISPLAYS[display_id]
+    led = colour.sd_single_led(peak, half_spectral_width=half_width, shape=WORKING_SHAPE)
+    plan = plan_relight(texture.basis, led, display)
+    assert plan.light.rgb8[missing] == 0 and plan.unreachable_dac[missing] == 1
+    reference = level2_texture(cube.texels(), led, display, wavelengths=cube.wavelengths)
+    expected = int(reference.unreachable.sum())
+    assert expected > 0
+    fused = relight_level2(texture, plan, kernel="numba")
+    generic = relight_level2(texture, plan, kernel="numpy")
+    full = relight_level2_full_band(cube, led, display)
+    assert fused.unreachable == generic.unreachable == full.unreachable == expected
+    assert fused.source == plan.source and 0 < fused.unreachable_fraction < 1
+    np.testing.assert_array_equal(relight_texels(texture, plan), fused.texels)
+
+
+@pytest.mark.parametrize("display_id", sorted(DISPLAYS))
+def test_no_texel_is_unreachable_for_the_colorchecker_under_d65(ces_samples_texture, display_id):
+    from workbench.hyperspectral import relight_level2, relight_level2_full_band
+
+    _, texture = ces_samples_texture
+    checker = _pure_samples_cube("colorchecker", 4, 6)
+    display = DISPLAYS[display_id]
+    d65 = get_illuminant("cie-d65")
+    plan = plan_relight(texture.basis, d65, display)
+    assert relight_level2(encode_cube(checker, texture.basis), plan).unreachable == 0
+    assert relight_level2_full_band(checker, d65, display).unreachable == 0
+    assert not level2_texture(checker.texels(), d65.sd, display,
+                              wavelengths=checker.wavelengths).unreachable.any()

@@ -13,6 +13,9 @@ source (design §2), in the cube's spatial layout:
 
 Either level goes with the engine light colour (printed, and stored in the
 PNG's text chunks); ``--render`` also writes what the engine then outputs.
+Level 2 also reports how many texels the light cannot carry (``DAC_t`` needs
+an albedo above 1, or a channel the light does not have: the engine shows
+them off target; design §2).
 """
 
 from __future__ import annotations
@@ -85,8 +88,8 @@ def _relight(args) -> int:
         fit_cube_basis,
         plan_relight,
         read_cube,
-        relight_full_band,
-        relight_texels,
+        relight_level2,
+        relight_level2_full_band,
         write_png_rgb8,
     )
     from workbench.hyperspectral.basis import DEFAULT_TARGET_MAX_DE00
@@ -118,15 +121,19 @@ def _relight(args) -> int:
         texture = authored_srgb8_cube(cube)
         summary["texture"] = "authored sRGB under D65 (as scanned)"
     elif basis_choice == "full":
-        texture = relight_full_band(cube, illuminant, display, k=k, observer=observer)
+        relit = relight_level2_full_band(cube, illuminant, display, k=k, observer=observer)
+        texture = relit.texels
         summary["texture"] = "level 2, full band"
+        summary["unreachable_texels"] = relit.unreachable
     else:
         target = DEFAULT_TARGET_MAX_DE00 if args.target is None else args.target
         basis = fit_cube_basis(cube, components=None if basis_choice == "auto" else basis_choice,
                                target_max_dE00=target, observer=observer, k=k)
         plan = plan_relight(basis, illuminant, display, k=k)
-        texture = relight_texels(encode_cube(cube, basis), plan, kernel=args.kernel)
+        relit = relight_level2(encode_cube(cube, basis), plan, kernel=args.kernel)
+        texture = relit.texels
         summary["texture"] = f"level 2, spectral basis K = {basis.components}"
+        summary["unreachable_texels"] = relit.unreachable
         summary["basis"] = {"K": basis.components, "held_out_max_dE00": {
             source: round(value, 4) for source, value in basis.held_out.max_dE00.items()},
             "target_max_dE00": None if basis_choice != "auto" else target}
@@ -153,6 +160,10 @@ def _relight(args) -> int:
         print(f"engine light colour (sRGB 8-bit): {', '.join(str(v) for v in summary['light_rgb8'])}"
               + ("" if light.in_gamut else "  (the source's white is outside the display gamut: "
                                            "clipped)"))
+        if "unreachable_texels" in summary:
+            print(f"unreachable texels: {summary['unreachable_texels']} of "
+                  f"{cube.height * cube.width} (the light cannot carry their DAC_t: albedo "
+                  "clipped at 1, or a channel the light does not have)")
         if "basis" in summary:
             worst = max(summary["basis"]["held_out_max_dE00"].values())
             print(f"basis K = {summary['basis']['K']}: max ΔE00 vs full band on held-out texels "

@@ -61,6 +61,7 @@ __all__ = [
     "DEFAULT_TARGET_MAX_DE00",
     "DEFAULT_RIDGE",
     "MAX_COMPONENTS",
+    "MIN_SPLIT_SAMPLES",
     "BasisAccuracy",
     "SpectralBasis",
     "BasisCube",
@@ -228,16 +229,25 @@ class BasisCube:
         return self.coefficients.shape[2]
 
 
+MIN_SPLIT_SAMPLES = 5
+"""Fewest samples :func:`split_held_out` splits (so that both sides keep some)."""
+
+
 def split_held_out(count: int, held_out_fraction: float = 0.2, *, seed: int = 0
                    ) -> tuple[np.ndarray, np.ndarray]:
     """Disjoint (training, held-out) index arrays for ``count`` samples.
 
-    With fewer than 5 samples nothing can be held out; both are then every
-    sample (and the held-out figure is not one).
+    Raises
+    ------
+    InputError
+        Fewer than :data:`MIN_SPLIT_SAMPLES` samples: nothing can be held out
+        and still leave a training set, so there is no held-out figure to give.
     """
+    if count < MIN_SPLIT_SAMPLES:
+        raise InputError(f"{count} reflectance(s) cannot be split into a training and a held-out "
+                         f"set; give at least {MIN_SPLIT_SAMPLES} (a larger cube or more "
+                         "reflectances), or pass held-out reflectances of their own")
     order = np.random.default_rng(seed).permutation(count)
-    if count < 5:
-        return order, order
     held = max(1, int(round(count * held_out_fraction)))
     return order[held:], order[:held]
 
@@ -296,7 +306,8 @@ def fit_spectral_basis(training, wavelengths, *, held_out=None, sources: Sequenc
         Their band centres (nm), covering 400–700 nm.
     held_out : array_like (M, B), optional
         Reflectances K is chosen on, not used in the fit. Default: 20 % of
-        ``training``, drawn at random (``seed``) and removed from the fit.
+        ``training``, drawn at random (``seed``) and removed from the fit
+        (:func:`split_held_out`: at least :data:`MIN_SPLIT_SAMPLES` needed).
     sources : sequence of str
         Library ids of the weighting sources (default :data:`BASIS_SOURCES`).
     components : int, optional
@@ -413,7 +424,8 @@ def fit_cube_basis(cube: ReflectanceCube, *, components: int | None = None,
 
     Draws up to ``training_texels`` texels for the fit and up to
     ``held_out_texels`` *other* texels to choose K on (a fifth of the cube
-    each way when it is small), then :func:`fit_spectral_basis`.
+    each way when it is small), then :func:`fit_spectral_basis`. A cube of
+    fewer than :data:`MIN_SPLIT_SAMPLES` texels raises :class:`InputError`.
     """
     texels = cube.texels()
     count = len(texels)

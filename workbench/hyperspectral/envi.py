@@ -55,6 +55,22 @@ def _wavelengths_nm(header: dict, path) -> np.ndarray | None:
     return wavelengths
 
 
+def _reflectance_scale(header: dict, path) -> float:
+    """The header's ``reflectance scale factor`` (1 when absent), checked to be a positive number."""
+    value = header.get("reflectance scale factor", 1.0)
+    fix = ("set 'reflectance scale factor' to the number that means reflectance 1 (e.g. 10000), "
+           "or remove it when the data are already on 0..1")
+    try:
+        scale = float(value)
+    except (TypeError, ValueError):
+        raise SpectrumFileError(path, None, f"'reflectance scale factor = {value}' is not a number",
+                                fix) from None
+    if not np.isfinite(scale) or scale <= 0:
+        raise SpectrumFileError(path, None, f"'reflectance scale factor = {value}' is not positive",
+                                fix)
+    return scale
+
+
 def read_cube_envi(path) -> ReflectanceCube:
     """Read an ENVI cube from its ``.hdr`` header (the data file is found beside it).
 
@@ -85,6 +101,12 @@ def read_cube_envi(path) -> ReflectanceCube:
                                 f"put the data file next to the header as {path.stem}"
                                 f"{ENVI_DATA_SUFFIX} (or .dat/.raw)") from None
     except Exception as error:  # spectral raises many types for a bad header
+        try:
+            fields = envi.read_envi_header(str(path))
+        except Exception:
+            fields = {}
+        if "reflectance scale factor" in fields:
+            _reflectance_scale(fields, path)      # spectral parses it too: name it and its fix
         raise SpectrumFileError(path, None, f"not a readable ENVI header ({error})",
                                 "check that this is the .hdr of an ENVI image") from None
     header = image.metadata
@@ -105,10 +127,7 @@ def read_cube_envi(path) -> ReflectanceCube:
                                 "export the cube again as uncompressed ENVI") from None
     data = np.array(raw, dtype=np.float32)
     del raw
-    scale = float(header.get("reflectance scale factor", 1.0))
-    if not np.isfinite(scale) or scale <= 0:
-        raise SpectrumFileError(path, None, f"'reflectance scale factor = {scale}' is not positive",
-                                "set it to the integer that means reflectance 1 (e.g. 10000)")
+    scale = _reflectance_scale(header, path)
     if scale != 1.0:
         data /= np.float32(scale)
     return ReflectanceCube(data, wavelengths, str(path))

@@ -3,8 +3,13 @@
 Layout: top-level datasets ``reflectance`` (H, W, B) and ``wavelengths`` (B,),
 nm (names: :mod:`workbench.hyperspectral.variables`; auto-detected otherwise).
 The wavelengths may instead be an attribute ``wavelengths`` of the cube
-dataset; a ``units``/``wavelength_units`` attribute of ``µm`` (or ``um``,
-``micrometers``) is converted to nm. MATLAB v7.3 files are HDF5 with the axes
+dataset. The wavelengths' unit is the first ``wavelength_units`` or ``units``
+attribute of the wavelengths dataset, else of the cube dataset, else of the
+file (:data:`WAVELENGTH_UNITS`): ``nm`` (``nanometers``) is taken as is, ``µm``
+(``um``, ``micrometers``) is converted to nm, any other name for the
+wavelengths is refused, and none means nm (a ``units`` attribute of the cube
+or the file that is not a length describes the reflectance data and is passed
+over). MATLAB v7.3 files are HDF5 with the axes
 stored in reverse (column-major) order; :func:`read_hdf5_cube` undoes that when
 asked to.
 
@@ -29,21 +34,45 @@ from workbench.hyperspectral.variables import (
     pick_cube_variables,
 )
 
-__all__ = ["read_cube_hdf5", "write_cube_hdf5", "read_hdf5_cube"]
+__all__ = ["WAVELENGTH_UNITS", "read_cube_hdf5", "write_cube_hdf5", "read_hdf5_cube"]
 
-_MICROMETRE_UNITS = ("um", "µm", "micrometers", "micrometres", "micrometer", "micrometre",
-                     "microns", "micron")
+WAVELENGTH_UNITS = {
+    **dict.fromkeys(("nm", "nanometer", "nanometers", "nanometre", "nanometres"), 1.0),
+    **dict.fromkeys(("µm", "μm", "um", "micrometer", "micrometers", "micrometre", "micrometres",
+                     "micron", "microns"), 1000.0),
+}
+"""Wavelength unit names (lower case) → factor to nm."""
 
 
-def _units_factor(*attribute_sets) -> float:
-    for attributes in attribute_sets:
-        for key in ("wavelength_units", "units"):
-            if key in attributes:
-                value = attributes[key]
-                value = value.decode() if isinstance(value, bytes) else str(value)
-                if value.strip().lower() in _MICROMETRE_UNITS:
-                    return 1000.0
-                return 1.0
+def _units_factor(path, wavelength_attributes, *other_attribute_sets) -> float:
+    """Factor to nm from the first units attribute found (module doc).
+
+    On the wavelengths dataset, ``wavelength_units`` and ``units`` name the
+    wavelengths' unit; on the cube dataset or the file only
+    ``wavelength_units`` does for sure (a ``units`` there that is not a length
+    describes the reflectance data and is passed over).
+    """
+    candidates = []          # (attributes, key, whether it surely names the wavelengths' unit)
+    if wavelength_attributes is not None:
+        candidates += [(wavelength_attributes, "wavelength_units", True),
+                       (wavelength_attributes, "units", True)]
+    for attributes in other_attribute_sets:
+        candidates += [(attributes, "wavelength_units", True), (attributes, "units", False)]
+    for attributes, key, about_wavelengths in candidates:
+        if key not in attributes:
+            continue
+        value = attributes[key]
+        if isinstance(value, np.ndarray) and value.size == 1:
+            value = value.reshape(()).item()
+        value = value.decode(errors="replace") if isinstance(value, bytes) else str(value)
+        factor = WAVELENGTH_UNITS.get(value.strip().lower())
+        if factor is not None:
+            return factor
+        if about_wavelengths:
+            raise SpectrumFileError(path, None, f"the wavelengths' attribute '{key} = {value}' is "
+                                    "not a unit the workbench knows (nm or µm)",
+                                    "give the wavelengths in nm (units = 'nm') or in µm "
+                                    "(units = 'um')")
     return 1.0
 
 
@@ -76,12 +105,13 @@ def read_hdf5_cube(path, *, matlab_axes: bool = False) -> ReflectanceCube:
             if wavelength_name is not None:
                 wavelength_dataset = datasets[wavelength_name]
                 wavelengths = np.asarray(wavelength_dataset[()], dtype=np.float64).reshape(-1)
-                factor = _units_factor(wavelength_dataset.attrs, cube_dataset.attrs, handle.attrs)
+                factor = _units_factor(path, wavelength_dataset.attrs, cube_dataset.attrs,
+                                        handle.attrs)
             else:
                 for key in ("wavelengths", "wavelength"):
                     if key in cube_dataset.attrs:
                         wavelengths = np.asarray(cube_dataset.attrs[key], dtype=np.float64).reshape(-1)
-                        factor = _units_factor(cube_dataset.attrs, handle.attrs)
+                        factor = _units_factor(path, None, cube_dataset.attrs, handle.attrs)
                         break
     except SpectrumFileError:
         raise

@@ -11,7 +11,7 @@ suffix         format                                 module
 
 Every reader returns a validated :class:`ReflectanceCube` (errors:
 :class:`workbench.errors.SpectrumFileError`, naming the file, the problem and
-the fix); every writer is atomic (:mod:`.atomic`). Variable names inside
+the fix); every writer is atomic (:func:`workbench.fileio.atomic_output`). Variable names inside
 container formats: :mod:`.variables`. ``read_cube(path, wavelengths=...)``
 resamples to other wavelengths, e.g. the working 380–780 nm at 1 nm.
 """

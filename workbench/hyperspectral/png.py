@@ -1,20 +1,21 @@
-"""8-bit RGB PNG files written with the standard library (zlib), atomically.
+"""8-bit RGB PNG texture files, written with Pillow, atomically.
 
-The engine textures are plain 8-bit RGB images; the PNG format for them is
-four chunks (``IHDR``, ``tEXt`` for provenance, ``IDAT``, ``IEND``), each a
-length, a type, the data and a CRC-32. Writing it with :mod:`zlib` and
-:mod:`struct` needs no image library, keeps the bytes exactly what the
-workbench computed (no colour management or gamma chunk that a viewer would
-apply: the values *are* the sRGB texels), and lets the writer be atomic like
-every other output.
+The engine textures are plain 8-bit RGB images with ``tEXt`` chunks for
+provenance (the engine light colour, the command's summary). The file holds
+exactly the texels the workbench computed: no ``gAMA``, ``cHRM``, ``sRGB`` or
+``iCCP`` chunk that a viewer would apply (the values *are* the sRGB texels).
+Pillow encodes it (its adaptive per-row filtering, zlib); the bytes go through
+:func:`workbench.fileio.atomic_writer`, so a failed write leaves the previous
+file and no partial one.
 
-Scanlines use PNG filter type 1 (Sub: each byte minus the one three bytes to
-its left), which suits smooth textures and costs one vectorized subtraction.
+:func:`png_chunks` lists a datastream's chunks (CRCs checked), for tests and
+tools that check what a file carries.
 
 References
 ----------
 ISO/IEC 15948:2004 / W3C, Portable Network Graphics (PNG) Specification
-(Second Edition), §5 (datastream), §9 (filtering), §11.2.2 (IHDR), §11.3.4.3 (tEXt).
+(Second Edition), §5 (datastream), §11.3.4.3 (tEXt); Pillow,
+``PIL.PngImagePlugin.PngInfo``.
 """
 
 from __future__ import annotations
@@ -26,23 +27,24 @@ from pathlib import Path
 import numpy as np
 
 from workbench.errors import InputError
-from workbench.fileio import atomic_output
+from workbench.fileio import atomic_writer
 
 __all__ = ["PNG_SIGNATURE", "write_png_rgb8", "png_chunks"]
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
-def _chunk(kind: bytes, data: bytes) -> bytes:
-    return (struct.pack(">I", len(data)) + kind + data
-            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+def _text_info(text: dict[str, str] | None):
+    from PIL.PngImagePlugin import PngInfo
 
-
-def _text_chunk(keyword: str, text: str) -> bytes:
-    key = keyword.encode("latin-1", "replace")[:79]
-    if not key or b"\x00" in key:
-        raise InputError(f"PNG text keyword {keyword!r} must be 1–79 Latin-1 characters")
-    return _chunk(b"tEXt", key + b"\x00" + text.encode("latin-1", "replace"))
+    info = PngInfo()
+    for keyword, value in (text or {}).items():
+        key = str(keyword).encode("latin-1", "replace")[:79]
+        if not key or b"\x00" in key:
+            raise InputError(f"PNG text keyword {keyword!r} must be 1–79 Latin-1 characters")
+        # tEXt holds Latin-1; other characters become '?' (bytes keep Pillow from using iTXt).
+        info.add_text(key.decode("latin-1"), str(value).encode("latin-1", "replace"))
+    return info
 
 
 def write_png_rgb8(path, rgb, text: dict[str, str] | None = None, *, level: int = 6) -> Path:
@@ -63,6 +65,8 @@ def write_png_rgb8(path, rgb, text: dict[str, str] | None = None, *, level: int 
     -------
     Path
     """
+    from PIL import Image
+
     rgb = np.asarray(rgb)
     if rgb.ndim != 3 or rgb.shape[2] != 3 or min(rgb.shape[:2]) == 0:
         raise InputError(f"a PNG texture needs shape (H, W, 3); got {rgb.shape}")
@@ -70,19 +74,12 @@ def write_png_rgb8(path, rgb, text: dict[str, str] | None = None, *, level: int 
         if not np.issubdtype(rgb.dtype, np.integer) or rgb.min() < 0 or rgb.max() > 255:
             raise InputError("PNG texels must be integers 0..255")
         rgb = rgb.astype(np.uint8)
-    height, width, _ = rgb.shape
-    rows = np.ascontiguousarray(rgb).reshape(height, width * 3)
-    filtered = np.empty((height, width * 3 + 1), dtype=np.uint8)
-    filtered[:, 0] = 1                                   # filter type Sub
-    filtered[:, 1:4] = rows[:, :3]
-    np.subtract(rows[:, 3:], rows[:, :-3], out=filtered[:, 4:], casting="unsafe")
-    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)   # 8-bit truecolour
-    body = [PNG_SIGNATURE, _chunk(b"IHDR", header)]
-    body += [_text_chunk(key, value) for key, value in (text or {}).items()]
-    body += [_chunk(b"IDAT", zlib.compress(filtered.tobytes(), level)), _chunk(b"IEND", b"")]
+    if not 0 <= level <= 9:
+        raise InputError(f"PNG compression level {level} must be 0..9")
+    image = Image.fromarray(np.ascontiguousarray(rgb))
     path = Path(path)
-    with atomic_output(path) as (staged,):
-        staged.write_bytes(b"".join(body))
+    with atomic_writer(path, "wb") as handle:
+        image.save(handle, "PNG", pnginfo=_text_info(text), compress_level=level)
     return path
 
 

@@ -7,13 +7,16 @@ the texel uploaded is ``srgb_encode(srgb_decode(DAC_t) ⊘ light_lin)`` (clipped
 - :func:`plan_relight` is the work of a lighting change: the K × 3 matrix
   (basis × source weights, folded with the display's XYZ → drive matrix) and
   the light's 256-entry texel tables.
-- :func:`relight_texels` runs one per-texel kernel over the float16
-  coefficient planes; the kernels are a registry, :data:`RELIGHT_KERNELS`:
-  ``"numba"`` (fused, for separable displays: the default) and ``"numpy"``
-  (any display model, through its own inverse).
-- :func:`relight_full_band` is the reference: the ``(N, B) @ (B, 3)`` float32
-  product of the full cube with the source weights, then the display model's
-  inverse and the same texel arithmetic.
+- :func:`relight_level2` runs one per-texel kernel over the float16
+  coefficient planes and counts the texels the light cannot carry (design §2:
+  "the texel says so"); :func:`relight_texels` is its texels alone. The
+  kernels are a registry, :data:`RELIGHT_KERNELS`: ``"numba"`` (fused, for
+  separable displays: the default) and ``"numpy"`` (any display model, through
+  its own inverse).
+- :func:`relight_level2_full_band` is the reference: the ``(N, B) @ (B, 3)``
+  float32 product of the full cube with the source weights, then the display
+  model's inverse and the same texel arithmetic; :func:`relight_full_band` is
+  its texels alone.
 - :func:`authored_srgb8_cube` is the level-1 texture: the cube's sRGB under D65
   (the texture as scanned), which level 1 leaves as is.
 
@@ -32,7 +35,7 @@ import colour
 import numpy as np
 
 from workbench.colorimetry import DEFAULT_K, DEFAULT_OBSERVER
-from workbench.colour_management import LightColour
+from workbench.colour_management import LightColour, level2_albedo8, light_colour_from_XYZ
 from workbench.display import DisplayModel, SRGBDisplay, quantize_dac
 from workbench.errors import InputError
 from workbench.hyperspectral.basis import BasisCube, SpectralBasis
@@ -42,15 +45,18 @@ from workbench.hyperspectral.channel_inverse import (
     is_channel_separable,
 )
 from workbench.hyperspectral.cube import ReflectanceCube
-from workbench.hyperspectral.level2_texels import level2_texel_table, level2_texels_from_dac
+from workbench.hyperspectral.level2_texels import level2_texel_table, level2_unreachable_dac
 from workbench.hyperspectral.relight_numpy import relight_level2_planes_numpy
 from workbench.hyperspectral.resampling import XYZ_band_weights
 
 __all__ = [
     "RelightPlan",
+    "RelitTexture",
     "RELIGHT_KERNELS",
     "plan_relight",
+    "relight_level2",
     "relight_texels",
+    "relight_level2_full_band",
     "relight_full_band",
     "authored_srgb8_cube",
     "display_inverse_lut",
@@ -99,6 +105,11 @@ class RelightPlan:
     display : DisplayModel
     texel_table : ndarray (3, 256), uint8
         Level-2 texel per integer ``DAC_t``, per channel, for this light.
+    unreachable_dac : ndarray (3,), int32
+        Per channel, the integer ``DAC_t`` from which the light cannot carry
+        the texel (albedo clipped at 1, or a channel the light does not have;
+        256: none): a texel is unreachable when any channel reaches it
+        (:func:`~workbench.hyperspectral.level2_texels.level2_unreachable_dac`).
     inverse_lut : ChannelInverseLUT or None
         The display inverse as tables (None: the model is not separable).
     drive_matrix, drive_offset : ndarray (K, 3) and (3,), float32, or None
@@ -112,17 +123,42 @@ class RelightPlan:
     light: LightColour
     display: DisplayModel
     texel_table: np.ndarray
+    unreachable_dac: np.ndarray
     inverse_lut: ChannelInverseLUT | None
     drive_matrix: np.ndarray | None
     drive_offset: np.ndarray | None
 
 
+@dataclass(frozen=True, eq=False)
+class RelitTexture:
+    """Level-2 texels of a texture under one source, and how many the light cannot carry.
+
+    Attributes
+    ----------
+    texels : ndarray (H, W, 3), uint8
+        The texture to upload.
+    unreachable : int
+        Texels whose ``DAC_t`` the engine cannot reach under this light: an
+        albedo above 1 (clipped) or a channel the light does not have (design
+        §2; :func:`workbench.colour_management.level2_albedo8`).
+    source : str
+    """
+
+    texels: np.ndarray
+    unreachable: int
+    source: str
+
+    @property
+    def unreachable_fraction(self) -> float:
+        """``unreachable`` over the number of texels."""
+        count = self.texels.shape[0] * self.texels.shape[1]
+        return self.unreachable / count if count else 0.0
+
+
 def _light_from_weights(weights: np.ndarray, display: DisplayModel) -> LightColour:
-    """The level-1 light colour (:func:`workbench.colour_management.light_colour`) from band
-    weights: the perfect diffuser's ``XYZ_t`` is the sum of the weights over the bands."""
-    XYZ = weights.sum(axis=0)
-    dac = display.inverse(XYZ)
-    return LightColour(XYZ=XYZ, dac=dac, rgb8=quantize_dac(dac), in_gamut=bool(display.in_gamut(XYZ)))
+    """The level-1 light colour from band weights: the perfect diffuser's ``XYZ_t`` is the
+    sum of the weights over the bands."""
+    return light_colour_from_XYZ(weights.sum(axis=0), display)
 
 
 def plan_relight(basis: SpectralBasis, illuminant, display: DisplayModel | None = None, *,
@@ -162,10 +198,11 @@ def plan_relight(basis: SpectralBasis, illuminant, display: DisplayModel | None 
         drive_offset = (XYZ_offset @ lut.XYZ_to_drive + lut.drive_offset).astype(np.float32)
     return RelightPlan(source=name, basis=basis, XYZ_matrix=XYZ_matrix, XYZ_offset=XYZ_offset,
                        light=light, display=display, texel_table=level2_texel_table(light.linear),
+                       unreachable_dac=level2_unreachable_dac(light.linear),
                        inverse_lut=lut, drive_matrix=drive_matrix, drive_offset=drive_offset)
 
 
-def _relight_numba(planes: np.ndarray, plan: RelightPlan, out: np.ndarray) -> np.ndarray:
+def _relight_numba(planes: np.ndarray, plan: RelightPlan, out: np.ndarray) -> int:
     if plan.inverse_lut is None:
         raise InputError(f"kernel 'numba' needs a display separable per channel; "
                          f"{plan.display.describe()!r} is not: use kernel 'numpy'")
@@ -173,24 +210,36 @@ def _relight_numba(planes: np.ndarray, plan: RelightPlan, out: np.ndarray) -> np
 
     return relight_level2_planes_numba(planes, plan.drive_matrix, plan.drive_offset,
                                        plan.inverse_lut.cell_dac, plan.inverse_lut.thresholds,
-                                       plan.texel_table, out)
+                                       plan.texel_table, plan.unreachable_dac, out)
 
 
-def _relight_numpy(planes: np.ndarray, plan: RelightPlan, out: np.ndarray) -> np.ndarray:
+def _relight_numpy(planes: np.ndarray, plan: RelightPlan, out: np.ndarray) -> int:
     return relight_level2_planes_numpy(planes, plan.XYZ_matrix, plan.XYZ_offset, plan.display,
-                                       plan.texel_table, out)
+                                       plan.texel_table, plan.unreachable_dac, out)
 
 
-RELIGHT_KERNELS: dict[str, Callable[[np.ndarray, RelightPlan, np.ndarray], np.ndarray]] = {
+RELIGHT_KERNELS: dict[str, Callable[[np.ndarray, RelightPlan, np.ndarray], int]] = {
     "numba": _relight_numba,
     "numpy": _relight_numpy,
 }
-"""Per-texel level-2 kernels: name → ``kernel(planes (K, N) float16, plan, out (N, 3) uint8)``."""
+"""Per-texel level-2 kernels: name → ``kernel(planes (K, N) float16, plan, out (N, 3) uint8)``,
+which writes ``out`` and returns the number of unreachable texels
+(:attr:`RelightPlan.unreachable_dac`)."""
 
 
 def relight_texels(texture: BasisCube, plan: RelightPlan, *, kernel: str = "auto",
                    out: np.ndarray | None = None) -> np.ndarray:
     """Level-2 texels ``(H, W, 3)`` uint8 of a compressed cube under ``plan``'s source.
+
+    :attr:`RelitTexture.texels` of :func:`relight_level2` (same parameters),
+    which also counts the texels the light cannot carry.
+    """
+    return relight_level2(texture, plan, kernel=kernel, out=out).texels
+
+
+def relight_level2(texture: BasisCube, plan: RelightPlan, *, kernel: str = "auto",
+                   out: np.ndarray | None = None) -> RelitTexture:
+    """Level-2 texels of a compressed cube under ``plan``'s source, with the unreachable count.
 
     Parameters
     ----------
@@ -203,6 +252,12 @@ def relight_texels(texture: BasisCube, plan: RelightPlan, *, kernel: str = "auto
         display is separable per channel, else ``"numpy"``.
     out : ndarray (H, W, 3), uint8, optional
         Reused output buffer (a runtime relights into the same texture).
+
+    Returns
+    -------
+    RelitTexture
+        ``texels`` (``out`` when given) and the number of texels the light
+        cannot carry, counted in the kernel from :attr:`RelightPlan.unreachable_dac`.
     """
     if plan.basis is not texture.basis:
         raise InputError("the relight plan was built for another basis than the texture's; "
@@ -221,8 +276,8 @@ def relight_texels(texture: BasisCube, plan: RelightPlan, *, kernel: str = "auto
     elif out.shape != shape or out.dtype != np.uint8 or not out.flags.c_contiguous:
         raise InputError(f"out must be a C-contiguous uint8 array of shape {shape}")
     planes = np.ascontiguousarray(texture.coefficients).reshape(K, height * width)
-    run(planes, plan, out.reshape(height * width, 3))
-    return out
+    unreachable = run(planes, plan, out.reshape(height * width, 3))
+    return RelitTexture(texels=out, unreachable=int(unreachable), source=plan.source)
 
 
 def relight_full_band(cube: ReflectanceCube, illuminant, display: DisplayModel | None = None, *,
@@ -230,15 +285,29 @@ def relight_full_band(cube: ReflectanceCube, illuminant, display: DisplayModel |
                       weights: np.ndarray | None = None) -> np.ndarray:
     """Reference level-2 texels ``(H, W, 3)`` uint8 from every band of ``cube``.
 
+    :attr:`RelitTexture.texels` of :func:`relight_level2_full_band` (same
+    parameters), which also counts the texels the light cannot carry.
+    """
+    return relight_level2_full_band(cube, illuminant, display, k=k, observer=observer,
+                                    weights=weights).texels
+
+
+def relight_level2_full_band(cube: ReflectanceCube, illuminant,
+                             display: DisplayModel | None = None, *, k: float = DEFAULT_K,
+                             observer: str | None = None,
+                             weights: np.ndarray | None = None) -> RelitTexture:
+    """Reference level-2 texels from every band of ``cube``, with the unreachable count.
+
     ``XYZ_t = ρ @ W`` as one ``(N, B) @ (B, 3)`` float32 product (design §8),
     then the display model's inverse, rounding and the level-2 texel
-    arithmetic — the naive path the basis kernel is checked and timed against.
-    ``weights`` (B × 3, on the display's scale) skip the colour-science
-    integration when already known, as in :func:`plan_relight`.
+    arithmetic (:func:`workbench.colour_management.level2_albedo8`) — the
+    naive path the basis kernel is checked and timed against. ``weights``
+    (B × 3, on the display's scale) skip the colour-science integration when
+    already known, as in :func:`plan_relight`.
     """
     display = display or SRGBDisplay()
     observer = observer or DEFAULT_OBSERVER
-    sd, _ = _illuminant_sd(illuminant)
+    sd, name = _illuminant_sd(illuminant)
     if weights is None:
         weights = XYZ_band_weights(sd, cube.wavelengths, observer, k=k,
                                    Y_white=float(display.white_XYZ[1]))
@@ -249,8 +318,9 @@ def relight_full_band(cube: ReflectanceCube, illuminant, display: DisplayModel |
     XYZ = cube.texels() @ weights.astype(np.float32)
     light = _light_from_weights(weights, display)
     dac = quantize_dac(display.inverse(XYZ))
-    texels = level2_texels_from_dac(dac, light.linear).astype(np.uint8)
-    return texels.reshape(cube.height, cube.width, 3)
+    texels, unreachable = level2_albedo8(dac, light.linear)
+    return RelitTexture(texels=texels.astype(np.uint8).reshape(cube.height, cube.width, 3),
+                        unreachable=int(np.count_nonzero(unreachable)), source=name)
 
 
 def authored_srgb8_cube(cube: ReflectanceCube) -> np.ndarray:

@@ -10,7 +10,11 @@ Per texel, in one pass over the float16 coefficient planes:
    (:class:`~workbench.hyperspectral.channel_inverse.ChannelInverseLUT`): one
    look-up then a comparison or two give the integer ``DAC_t``;
 4. the level-2 texel (sRGB decode, division by the light colour, clip, sRGB
-   encode) from a 256-entry table per channel, written as uint8.
+   encode) from a 256-entry table per channel, written as uint8;
+5. the texels the light cannot carry (albedo clipped at 1, or a channel the
+   light does not have) are counted: a channel's DAC reaches the light's
+   unreachable level ``v`` exactly when ``u ≥ thresholds[v]``, so this is one
+   vectorized comparison per channel on the block, not per-texel branches.
 
 Texels are processed in blocks of :data:`BLOCK` so that steps 1–2 run as
 vector instructions over a block held in L1 cache, and the blocks are shared
@@ -88,11 +92,24 @@ def _texel(u, cell, cell_dac, thresholds, texel_table):
     return texel_table[dac]
 
 
+@njit(fastmath=_FAST, inline="always", cache=True)
+def _count_unreachable(u_r, u_g, u_b, count, limit_r, limit_g, limit_b):
+    missed = 0
+    for i in range(count):
+        missed += (u_r[i] >= limit_r) | (u_g[i] >= limit_g) | (u_b[i] >= limit_b)
+    return missed
+
+
 @njit(parallel=True, fastmath=_FAST, cache=True)
-def _relight_kernel(planes, matrix, offset, cell_dac, thresholds, texel_table, out, chunks):
+def _relight_kernel(planes, matrix, offset, cell_dac, thresholds, texel_table, unreachable_dac,
+                    out, unreachable, chunks):
     count_all = planes.shape[1]
     step = ((count_all + chunks - 1) // chunks + BLOCK - 1) // BLOCK * BLOCK
     scale = np.float32(cell_dac.shape[1] - 1)
+    # u from which each channel's DAC reaches the unreachable level (+inf: never).
+    limit_r = thresholds[0, unreachable_dac[0]]
+    limit_g = thresholds[1, unreachable_dac[1]]
+    limit_b = thresholds[2, unreachable_dac[2]]
     for chunk in prange(chunks):
         drive_r = np.empty(BLOCK, np.float32)
         drive_g = np.empty(BLOCK, np.float32)
@@ -103,23 +120,27 @@ def _relight_kernel(planes, matrix, offset, cell_dac, thresholds, texel_table, o
         dac_r, dac_g, dac_b = cell_dac[0], cell_dac[1], cell_dac[2]
         thr_r, thr_g, thr_b = thresholds[0], thresholds[1], thresholds[2]
         tex_r, tex_g, tex_b = texel_table[0], texel_table[1], texel_table[2]
+        missed = 0
         for start in range(chunk * step, min(count_all, (chunk + 1) * step), BLOCK):
             count = min(BLOCK, count_all - start)
             _accumulate(planes, start, count, matrix, offset, drive_r, drive_g, drive_b)
             _to_u(drive_r, count, scale, cell_r)
             _to_u(drive_g, count, scale, cell_g)
             _to_u(drive_b, count, scale, cell_b)
+            missed += _count_unreachable(drive_r, drive_g, drive_b, count,
+                                         limit_r, limit_g, limit_b)
             block = out[start:start + count]
             for i in range(count):
                 block[i, 0] = _texel(drive_r[i], cell_r[i], dac_r, thr_r, tex_r)
                 block[i, 1] = _texel(drive_g[i], cell_g[i], dac_g, thr_g, tex_g)
                 block[i, 2] = _texel(drive_b[i], cell_b[i], dac_b, thr_b, tex_b)
+        unreachable[chunk] = missed
 
 
 def relight_level2_planes_numba(planes: np.ndarray, drive_matrix: np.ndarray,
                                 drive_offset: np.ndarray, cell_dac: np.ndarray,
                                 thresholds: np.ndarray, texel_table: np.ndarray,
-                                out: np.ndarray) -> np.ndarray:
+                                unreachable_dac: np.ndarray, out: np.ndarray) -> int:
     """Run the fused kernel (module doc) over flattened planes.
 
     Parameters
@@ -134,15 +155,19 @@ def relight_level2_planes_numba(planes: np.ndarray, drive_matrix: np.ndarray,
         :class:`~workbench.hyperspectral.channel_inverse.ChannelInverseLUT` tables.
     texel_table : ndarray (3, 256), uint8
         :func:`~workbench.hyperspectral.level2_texels.level2_texel_table`.
+    unreachable_dac : ndarray (3,), int32
+        :func:`~workbench.hyperspectral.level2_texels.level2_unreachable_dac`.
     out : ndarray (N, 3), uint8, C-contiguous
         Receives the texels.
 
     Returns
     -------
-    ndarray
-        ``out``.
+    int
+        The number of texels the light cannot carry.
     """
     chunks = 4 * numba.get_num_threads()  # a few blocks of texels per thread, to balance load
+    unreachable = np.zeros(chunks, dtype=np.int64)
     _relight_kernel(planes.view(np.uint16), drive_matrix, drive_offset, cell_dac, thresholds,
-                    texel_table, out, chunks)
-    return out
+                    texel_table, np.asarray(unreachable_dac, dtype=np.int32), out, unreachable,
+                    chunks)
+    return int(unreachable.sum())

@@ -1,8 +1,9 @@
 """Synthetic reflectance cubes made of real reflectance sets, mixed smoothly over the image.
 
 The image is cut into square cells; each cell corner gets one reflectance
-drawn from the ColorChecker (24, BabelColor average) and the 99 CIE 2017 colour
-evaluation samples (:mod:`workbench.samples`), and each texel is the
+drawn from a set of materials — by default the ColorChecker (24, BabelColor
+average) and the 99 CIE 2017 colour evaluation samples, or any set of
+:mod:`workbench.hyperspectral.materials` — and each texel is the
 smoothstep-weighted bilinear mixture of its cell's four corners. The cube thus
 holds flat patches of real materials (around the corners) joined by soft
 gradients of physically plausible mixtures (convex combinations), like painted
@@ -22,11 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from workbench.colorimetry import WORKING_WAVELENGTHS
 from workbench.errors import InputError
 from workbench.hyperspectral.cube import ReflectanceCube
-from workbench.hyperspectral.resampling import resampling_matrix
-from workbench.samples import ces99, colorchecker
+from workbench.hyperspectral.materials import material_reflectances
 
 __all__ = ["PAPER_CUBE_WAVELENGTHS", "sample_reflectances", "synthesize_cube"]
 
@@ -36,8 +35,8 @@ PAPER_CUBE_WAVELENGTHS = np.arange(380.0, 781.0, 4.0)
 
 def sample_reflectances(wavelengths=PAPER_CUBE_WAVELENGTHS) -> np.ndarray:
     """The ColorChecker (24) and CIE 2017 (99) reflectances at ``wavelengths``: ``(123, B)``."""
-    working = np.vstack([colorchecker().reflectances, ces99().reflectances])
-    return working @ resampling_matrix(WORKING_WAVELENGTHS, wavelengths).T
+    return np.vstack([material_reflectances("colorchecker", wavelengths),
+                      material_reflectances("ces99", wavelengths)])
 
 
 def _smoothstep(t: np.ndarray) -> np.ndarray:
@@ -45,7 +44,8 @@ def _smoothstep(t: np.ndarray) -> np.ndarray:
 
 
 def synthesize_cube(height: int, width: int, *, wavelengths=PAPER_CUBE_WAVELENGTHS,
-                    cell: int = 64, seed: int = 0, reflectances=None) -> ReflectanceCube:
+                    cell: int = 64, seed: int = 0, reflectances=None,
+                    materials: str | None = None) -> ReflectanceCube:
     """A ``height × width`` cube of real reflectances mixed smoothly (module doc).
 
     Parameters
@@ -60,6 +60,8 @@ def synthesize_cube(height: int, width: int, *, wavelengths=PAPER_CUBE_WAVELENGT
         Random seed of the corner assignment.
     reflectances : ndarray (M, B), optional
         The materials to mix (at ``wavelengths``); default :func:`sample_reflectances`.
+    materials : str, optional
+        What ``reflectances`` are, for the cube's ``source`` (e.g. "CIE 2017 samples").
 
     Returns
     -------
@@ -70,13 +72,17 @@ def synthesize_cube(height: int, width: int, *, wavelengths=PAPER_CUBE_WAVELENGT
     if height < 1 or width < 1 or cell < 1:
         raise InputError(f"a cube needs positive height, width and cell; got {height}, {width}, {cell}")
     wavelengths = np.asarray(wavelengths, dtype=np.float64)
-    materials = (sample_reflectances(wavelengths) if reflectances is None
-                 else np.asarray(reflectances, dtype=np.float64))
-    if materials.ndim != 2 or materials.shape[1] != wavelengths.size:
-        raise InputError(f"reflectances must be (M, {wavelengths.size}); got {materials.shape}")
+    if reflectances is None:
+        spectra = sample_reflectances(wavelengths)
+        materials = materials or "ColorChecker + CIE 2017 samples"
+    else:
+        spectra = np.asarray(reflectances, dtype=np.float64)
+        materials = materials or f"{len(spectra)} given reflectances"
+    if spectra.ndim != 2 or spectra.shape[1] != wavelengths.size:
+        raise InputError(f"reflectances must be (M, {wavelengths.size}); got {spectra.shape}")
     rng = np.random.default_rng(seed)
     rows, cols = -(-height // cell) + 1, -(-width // cell) + 1
-    corners = materials[rng.integers(0, len(materials), size=(rows, cols))].astype(np.float32)
+    corners = spectra[rng.integers(0, len(spectra), size=(rows, cols))].astype(np.float32)
     x = np.arange(width)
     col_index = x // cell
     fx = _smoothstep((x % cell) / cell).astype(np.float32)[:, None]
@@ -85,6 +91,6 @@ def synthesize_cube(height: int, width: int, *, wavelengths=PAPER_CUBE_WAVELENGT
         j, fy = y // cell, np.float32(_smoothstep((y % cell) / cell))
         column_spectra = (1 - fy) * corners[j] + fy * corners[j + 1]        # (cols, B)
         data[y] = (1 - fx) * column_spectra[col_index] + fx * column_spectra[col_index + 1]
-    source = (f"synthetic {height}×{width} cube: ColorChecker + CIE 2017 samples mixed over "
-              f"{cell}-texel cells (seed {seed})")
+    source = (f"synthetic {height}×{width} cube: {materials} mixed over {cell}-texel cells "
+              f"(seed {seed})")
     return ReflectanceCube(data, wavelengths, source)
