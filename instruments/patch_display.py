@@ -41,7 +41,9 @@ Errors
 Timeouts
     The client waits at most ``timeout_s`` to connect and for each reply, then
     reports which request went unanswered; the server drops a client that has
-    been silent for its idle timeout.
+    been silent for its idle timeout. A client whose connection was dropped
+    (e.g. during a long pause) connects again, says ``hello`` again, and
+    repeats its ``show`` (once; showing a patch twice is harmless).
 
 Examples
 --------
@@ -89,6 +91,10 @@ MAX_LINE_BYTES = 4096
 
 class PatchDisplayError(RuntimeError):
     """A patch could not be shown; the message names the display, the request and the fix."""
+
+
+class _ConnectionDropped(PatchDisplayError):
+    """The patch server closed (or reset) the connection."""
 
 
 @runtime_checkable
@@ -253,28 +259,35 @@ class TcpPatchDisplay:
         if not (timeout_s > 0):
             raise ValueError(f"timeout_s {timeout_s!r} must be a positive number of seconds")
         self.host, self.port, self.timeout_s = host, int(port), float(timeout_s)
+        self.client = client
         self._next_id = 1
+        self._sock: socket.socket | None = None
+        self._closed = False
+        self.display_name = ""
+        self._connect()
+
+    def _connect(self) -> None:
+        """Connect and say ``hello``; on failure nothing stays open."""
         try:
-            self._sock = socket.create_connection((host, self.port), timeout=self.timeout_s)
+            sock = socket.create_connection((self.host, self.port), timeout=self.timeout_s)
         except OSError as error:
             raise PatchDisplayError(
                 f"cannot connect to the patch server at {self.where} ({error}); start the VR application's "
                 "patch server (or `python -m instruments.patch_server --port PORT`) and check host and port"
             ) from error
-        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._reader = LineReader(self._sock)
-        self.display_name = ""
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._sock, self._reader = sock, LineReader(sock)
         try:
-            reply = self._request({"cmd": "hello", "protocol": PATCH_PROTOCOL, "client": client})
+            reply = self._request({"cmd": "hello", "protocol": PATCH_PROTOCOL, "client": self.client})
+            if reply.get("protocol") != PATCH_PROTOCOL:
+                raise PatchDisplayError(
+                    f"the patch server at {self.where} speaks {reply.get('protocol')!r}, not "
+                    f"{PATCH_PROTOCOL!r}; update the VR application's patch server"
+                )
         except BaseException:
-            self._sock.close()
+            sock.close()
+            self._sock = None
             raise
-        if reply.get("protocol") != PATCH_PROTOCOL:
-            self._sock.close()
-            raise PatchDisplayError(
-                f"the patch server at {self.where} speaks {reply.get('protocol')!r}, not {PATCH_PROTOCOL!r}; "
-                "update the VR application's patch server"
-            )
         self.display_name = str(reply.get("display", ""))
 
     @property
@@ -294,13 +307,18 @@ class TcpPatchDisplay:
                 f"the patch server at {self.where} did not answer {message['cmd']!r} (id {message['id']}) "
                 f"within {self.timeout_s:g} s; check that the VR application is running and presenting frames"
             ) from None
-        except (OSError, ValueError) as error:
-            raise PatchDisplayError(
+        except OSError as error:  # reset, broken pipe: the server is gone or dropped us
+            raise _ConnectionDropped(
                 f"the connection to the patch server at {self.where} failed during {message['cmd']!r} "
                 f"(id {message['id']}): {error}; restart the VR application and resume"
             ) from error
-        if line is None:
+        except ValueError as error:
             raise PatchDisplayError(
+                f"the patch server at {self.where} sent a line longer than {MAX_LINE_BYTES} bytes during "
+                f"{message['cmd']!r} (id {message['id']}): {error}; it must follow {PATCH_PROTOCOL}"
+            ) from error
+        if line is None:
+            raise _ConnectionDropped(
                 f"the patch server at {self.where} closed the connection during {message['cmd']!r} "
                 f"(id {message['id']}); restart the VR application and resume"
             )
@@ -325,11 +343,29 @@ class TcpPatchDisplay:
         return reply
 
     def show(self, rgb_dac) -> None:
-        """Show ``rgb_dac`` and return once the server says the frame is presented."""
-        self._request({"cmd": "show", "rgb": validate_patch_rgb(rgb_dac)})
+        """Show ``rgb_dac`` and return once the server says the frame is presented.
+
+        If the server has dropped the connection (its idle timeout passed while
+        the instrument measured or the run was paused), connect again, say
+        ``hello`` again and repeat the ``show``, once.
+        """
+        request = {"cmd": "show", "rgb": validate_patch_rgb(rgb_dac)}
+        if self._closed:
+            raise PatchDisplayError(f"the patch display {self.where} has been closed")
+        if self._sock is None:  # an earlier reconnection failed: try again
+            self._connect()
+        try:
+            self._request(request)
+        except _ConnectionDropped as error:
+            _LOG.info("patch server %s dropped the connection (%s); connecting again", self.where, error)
+            self._sock.close()
+            self._sock = None
+            self._connect()
+            self._request(request)
 
     def close(self) -> None:
         """Say ``bye`` (best effort) and close the connection."""
+        self._closed = True
         if self._sock is None:
             return
         try:

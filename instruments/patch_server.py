@@ -195,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--host", default="127.0.0.1", help="address to listen on (default: loopback)")
     parser.add_argument("--port", type=int, required=True, help="TCP port (0: any free port, printed)")
     parser.add_argument("--idle-timeout", type=float, default=600.0, metavar="S",
-                        help="drop a client silent for S seconds (default 60)")
+                        help="drop a client silent for S seconds (default 600)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     headset = SimulatedHeadset()

@@ -26,9 +26,12 @@ from instruments.cs2000.emulator import (
     ErrorFault,
     Fault,
     GarbageFault,
+    MeasurementTiming,
     TimeoutFault,
     VanishFault,
     instrument_noise,
+    measurement_timing,
+    radiance_to_luminance,
 )
 from instruments.cs2000.protocol import (
     AngleKnobError,
@@ -76,6 +79,9 @@ __all__ = [
     "GarbageFault",
     "VanishFault",
     "instrument_noise",
+    "MeasurementTiming",
+    "measurement_timing",
+    "radiance_to_luminance",
     "PtyServer",
     "serve_on_pty",
     # errors

@@ -154,7 +154,8 @@ class Measurement:
     wavelengths
         380..780 nm at 1 nm (401 values, read-only).
     radiance
-        Spectral radiance in W·sr⁻¹·m⁻²·nm⁻¹ (401 values, read-only).
+        Spectral radiance in W·sr⁻¹·m⁻²·nm⁻¹ (401 values, read-only); NaN
+        where the instrument sent its "not computable" placeholder.
     XYZ
         CIE 1931 2° tristimulus values as computed by the instrument, cd/m²
         scale (``Y`` is the luminance); NaN where not computable.
@@ -259,7 +260,9 @@ class CS2000:
 
     Use it as a context manager: entering puts the instrument in remote mode
     (``RMTS,1``, or ``RMTS,2`` with ``no_flash_write``), leaving sends
-    ``RMTS,0`` in a ``finally`` and closes a port the driver opened.
+    ``RMTS,0`` in a ``finally`` and closes a port the driver opened. A failing
+    ``RMTS,0`` is logged as a warning, never raised: it must neither turn a
+    finished block into an error nor mask the exception a block raised.
 
     Parameters
     ----------
@@ -272,7 +275,11 @@ class CS2000:
         10 s; the second ``MEAS`` line is awaited for ``ttt + timeout_s``).
         The specification asks for at least 10 s.
     no_flash_write
-        Enter remote mode with ``RMTS,2`` (settings are not written to flash).
+        ``True``: enter remote mode with ``RMTS,2`` (settings are not written
+        to flash, which spares the flash memory in long automated sessions);
+        ``"if-supported"``: try ``RMTS,2`` and fall back to ``RMTS,1`` if the
+        instrument answers an error code (:attr:`remote_mode` tells which);
+        ``False``: ``RMTS,1``.
     spectral_format
         ``"ascii"`` reads spectra with ``MEDR,1,0,b`` (5 significant digits),
         ``"float32"`` with ``MEDR,1,1,b`` (big-endian IEEE-754 hex).
@@ -295,7 +302,7 @@ class CS2000:
         port: Any,
         timeout_s: float = 10.0,
         *,
-        no_flash_write: bool = False,
+        no_flash_write: bool | Literal["if-supported"] = False,
         spectral_format: Literal["ascii", "float32"] = "ascii",
         poll_interval_s: float = 0.05,
         clock: Callable[[], float] = time.monotonic,
@@ -309,11 +316,18 @@ class CS2000:
         if not poll_interval_s > 0:
             raise ValueError(f"poll_interval_s must be positive, got {poll_interval_s!r}")
         self._timeout_s = float(timeout_s)
-        self._no_flash_write = bool(no_flash_write)
+        if no_flash_write not in (False, True, "if-supported"):
+            raise ValueError(
+                f"no_flash_write must be False, True or 'if-supported', got {no_flash_write!r}"
+            )
+        self._no_flash_write = (
+            no_flash_write if no_flash_write == "if-supported" else bool(no_flash_write)
+        )
         self._spectral_format = spectral_format
         self._clock = clock
         self._rx = bytearray()
         self._in_remote = False
+        self._remote_mode = 0
         self._port_lost = False
         if isinstance(port, (str, os.PathLike)):
             self._port_name = os.fspath(port)
@@ -353,27 +367,53 @@ class CS2000:
         return self
 
     def __exit__(self, exc_type: Any, exc: BaseException | None, tb: Any) -> None:
+        # Leaving remote mode is housekeeping: if RMTS,0 fails, the work of the
+        # block is done (or its own exception is on its way out, and must not be
+        # masked), so the failure is only logged, with what to do should the
+        # instrument's keys stay locked.
         try:
             if self._in_remote and not self._port_lost:
                 self.leave_remote()
             elif self._port_lost:
                 logger.info("%s: port gone, not sending RMTS,0", self._port_name)
         except CS2000Error as err:
-            if exc is None:
-                raise
-            logger.warning("could not leave remote mode on %s: %s", self._port_name, err)
+            logger.warning(
+                "%s: could not leave remote mode (RMTS,0): %s; if the instrument's keys stay "
+                "locked, switch it off and on", self._port_name, err
+            )
         finally:
             self.close()
 
+    @property
+    def remote_mode(self) -> int:
+        """0 local, 1 remote (``RMTS,1``), 2 remote without flash writes (``RMTS,2``)."""
+        return self._remote_mode
+
     def enter_remote(self) -> None:
-        """Enter remote mode: ``RMTS,1`` (or ``RMTS,2`` with ``no_flash_write``)."""
+        """Enter remote mode: ``RMTS,1``, or ``RMTS,2`` as ``no_flash_write`` asks.
+
+        With ``no_flash_write="if-supported"``, ``RMTS,2`` is tried first and an
+        ``ERnn`` answer to it (firmware that does not know the mode) falls back
+        to ``RMTS,1``; a timeout or a vanished port is raised as usual.
+        """
         self._discard_stale_input(warn=False)
-        self._query("RMTS", 2 if self._no_flash_write else 1)
+        mode = 1 if self._no_flash_write is False else 2
+        try:
+            self._query("RMTS", mode)
+        except CS2000Error as err:
+            if self._no_flash_write != "if-supported" or err.code is None:
+                raise
+            logger.info("%s: RMTS,2 answered %s; entering remote mode with RMTS,1 (settings "
+                        "may be written to flash)", self._port_name, err.code)
+            mode = 1
+            self._query("RMTS", mode)
         self._in_remote = True
+        self._remote_mode = mode
 
     def leave_remote(self) -> None:
         """Leave remote mode (``RMTS,0``); the instrument's keys work again."""
         self._in_remote = False
+        self._remote_mode = 0
         self._query("RMTS", 0)
 
     def close(self) -> None:
@@ -801,32 +841,53 @@ class CS2000:
         return countdown
 
     def _cancel_measurement(self, during: str) -> NoReturn:
-        """Send ``MEAS,0``, consume its acknowledgement, raise MeasurementCancelled."""
+        """Stop the measurement with ``MEAS,0`` and raise MeasurementCancelled.
+
+        No acknowledgement in time is logged (the cancel still stands); a
+        vanished port raises :class:`PortVanishedError` instead.
+        """
         logger.info("%s: cancelling %s (MEAS,0)", self._port_name, during)
-        self._write(encode_command("MEAS", 0))
-        deadline = self._clock() + self._timeout_s
         try:
-            while True:
-                reply = self._read_reply(deadline, "MEAS,0")
-                if reply.fields:  # a late "OK00,ttt" of the cancelled MEAS,1
-                    continue
-                if not reply.ok:
-                    logger.warning("%s: MEAS,0 answered %s", self._port_name, reply.code)
-                break
+            self._send_meas_0()
         except CS2000Timeout as exc:
             logger.warning("%s: no acknowledgement of MEAS,0: %s", self._port_name, exc)
         raise MeasurementCancelled(during)
 
     def _stop_measurement(self, why: str) -> None:
-        """Best effort: stop a measurement that may still run (``MEAS,0``)."""
+        """Best effort: stop a measurement that may still run (``MEAS,0``).
+
+        Called while another exception propagates, which must not be masked:
+        whatever goes wrong here is only logged.
+        """
         logger.warning("%s: stopping the measurement (MEAS,0) because %s", self._port_name, why)
         try:
-            self._write(encode_command("MEAS", 0))
-            deadline = self._clock() + self._timeout_s
-            while self._read_reply(deadline, "MEAS,0").fields:
-                pass  # a late "OK00,ttt"
+            self._send_meas_0()
         except CS2000Error as exc:
             logger.warning("%s: MEAS,0 got no clean acknowledgement: %s", self._port_name, exc)
+
+    def _send_meas_0(self) -> None:
+        """Send ``MEAS,0`` and read up to its acknowledgement.
+
+        A late ``OK00,ttt`` of the stopped ``MEAS,1`` (the pre-measurement
+        ended just before ``MEAS,0`` arrived) is skipped; an ``ERnn`` answer
+        is logged, since the instrument is idle either way.
+
+        Raises
+        ------
+        CS2000Timeout
+            No acknowledgement within ``timeout_s``.
+        PortVanishedError
+            The port disappeared.
+        """
+        self._write(encode_command("MEAS", 0))
+        deadline = self._clock() + self._timeout_s
+        while True:
+            reply = self._read_reply(deadline, "MEAS,0")
+            if reply.fields:  # a late "OK00,ttt" of the stopped MEAS,1
+                continue
+            if not reply.ok:
+                logger.warning("%s: MEAS,0 answered %s", self._port_name, reply.code)
+            return
 
     def _read_measurement(self, countdown: int) -> Measurement:
         binary = self._spectral_format == "float32"

@@ -18,7 +18,8 @@ ER00 (unknown command, wrong parameter count, not in remote mode), ER02
 measuring), ER20 (no data), ER10 (over range), ER99 (the radiance source
 failed). Other ``MEDR,2`` selectors than ``00`` answer ER17.
 
-Timing model (seconds, multiplied by ``time_scale``): a pre-measurement of
+Timing model (:func:`measurement_timing`; seconds, multiplied by
+``time_scale``): a pre-measurement of
 1 s (bright) to 10 s (at the luminance floor), then the announced measurement
 time ``ttt``: in normal mode about 1 s at ≥ 100 cd/m², growing as a power of
 the luminance to the 242 s limit at the floor (0.003 cd/m² at 1°, 0.075 at
@@ -42,6 +43,7 @@ wavelength and excitation purity against the equal-energy point.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import re
@@ -63,6 +65,9 @@ __all__ = [
     "VanishFault",
     "Fault",
     "CS2000Emulator",
+    "MeasurementTiming",
+    "measurement_timing",
+    "radiance_to_luminance",
     "instrument_noise",
 ]
 
@@ -237,6 +242,106 @@ class _Measurement:
     started_ok: bool = True
 
 
+@functools.lru_cache(maxsize=2)
+def _cmf_values(degrees: int) -> np.ndarray:
+    """CIE 1931 2° (``degrees=2``) or 1964 10° colour-matching functions, 380..780 nm at 1 nm."""
+    name = {2: "CIE 1931 2 Degree Standard Observer", 10: "CIE 1964 10 Degree Standard Observer"}
+    cmfs = colour.colorimetry.MSDS_CMFS_STANDARD_OBSERVER[name[degrees]].copy()
+    values = np.asarray(cmfs.align(colour.SpectralShape(380, 780, 1)).values, dtype=np.float64)
+    values.setflags(write=False)
+    return values
+
+
+def radiance_to_luminance(radiance: np.ndarray) -> float:
+    """Luminance in cd/m² of a spectral radiance, as the emulator computes it.
+
+    ``Lv = 683 × Σ L(λ) ȳ(λ) Δλ`` over 380..780 nm at Δλ = 1 nm (CIE 1931 2°);
+    ``radiance`` is 401 values in W·sr⁻¹·m⁻²·nm⁻¹.
+    """
+    return _K_M * float(np.asarray(radiance, dtype=np.float64) @ _cmf_values(2)[:, 1])
+
+
+@dataclass(frozen=True)
+class MeasurementTiming:
+    """How long the emulated CS-2000 takes for one measurement, at real timing.
+
+    Attributes
+    ----------
+    pre_measurement_s
+        Seconds from ``MEAS,1`` to the ``OK00,ttt`` line (1 s bright … 10 s at
+        the luminance floor).
+    measurement_s
+        ``ttt``: the whole seconds the instrument announces (2..242), from
+        ``OK00,ttt`` to the second line.
+    integration_s
+        Integration time the instrument reports in its conditions, seconds.
+    """
+
+    pre_measurement_s: float
+    measurement_s: int
+    integration_s: float
+
+    @property
+    def duration_s(self) -> float:
+        """Seconds from ``MEAS,1`` to the end of the measurement (data transfer excluded)."""
+        return self.pre_measurement_s + self.measurement_s
+
+
+def measurement_timing(
+    luminance_cd_m2: float, mode: int = 0, integration_s: float | None = None, angle: int = 0
+) -> MeasurementTiming:
+    """The emulator's timing model: pre-measurement, ``ttt`` and integration time.
+
+    Parameters
+    ----------
+    luminance_cd_m2
+        Luminance of the target (:func:`radiance_to_luminance`).
+    mode
+        Speed mode: 0 normal, 1 fast (automatic integration), 2/4
+        multi-integration, 3 manual.
+    integration_s
+        Set integration time in seconds for modes 2, 3 and 4.
+    angle
+        Measuring-angle code (0 = 1°, 1 = 0.2°, 2 = 0.1°): the luminance floor
+        scales with it.
+
+    Returns
+    -------
+    MeasurementTiming
+        Unscaled (real) times; the emulator multiplies the waits by its
+        ``time_scale`` but announces ``ttt`` as the real instrument would.
+
+    Notes
+    -----
+    Modes 0 and 1: with ``darkness`` = 0 at ≥ 100 cd/m² and 1 at the angle's
+    luminance floor (logarithmic in between), the measurement takes
+    ``max_s ** darkness`` seconds (``max_s`` = 242 normal, 16 fast) and the
+    pre-measurement ``1 + 9 × darkness``. Modes 2, 3, 4: a 1 s pre-measurement
+    and twice the integration time plus 1 s. ``ttt`` is that time rounded up
+    to whole seconds, within 2..242.
+
+    Examples
+    --------
+    >>> measurement_timing(500.0)
+    MeasurementTiming(pre_measurement_s=1.0, measurement_s=2, integration_s=0.5)
+    """
+    if mode in (0, 1):
+        floor = LUMINANCE_RANGE_CD_M2[angle][0]
+        equivalent = max(luminance_cd_m2, 1e-12) * (_FLOOR_1DEG / floor)
+        span = math.log(_BRIGHT_CD_M2 / _FLOOR_1DEG)
+        darkness = min(1.0, max(0.0, math.log(_BRIGHT_CD_M2 / equivalent) / span))
+        total = math.exp(darkness * math.log(_MAX_S[mode]))
+        pre, integration = 1.0 + 9.0 * darkness, total / 2
+    elif mode in (2, 3, 4):
+        if integration_s is None:
+            raise ValueError(f"speed mode {mode} needs integration_s")
+        pre, total, integration = 1.0, 2 * float(integration_s) + 1.0, float(integration_s)
+    else:
+        raise ValueError(f"speed mode must be 0..4, got {mode!r}")
+    countdown = int(min(242, max(2, math.ceil(total - 1e-9))))
+    return MeasurementTiming(pre, countdown, integration)
+
+
 def instrument_noise(radiance: np.ndarray, rng: np.random.Generator, *, relative_noise: float = 0.002,
                      noise_floor: float = 2e-8, repeatability: float = 0.001, angle: int = 0) -> np.ndarray:
     """Radiance as the emulated CS-2000 measures it: the noise model of :class:`CS2000Emulator`.
@@ -265,7 +370,9 @@ class CS2000Emulator:
     time_scale
         Multiplies every modelled duration: 1 = real timing, 0 = no waiting.
     seed
-        Seed of the instrument-noise generator.
+        Seed of the instrument-noise generator: an int, a
+        :class:`numpy.random.SeedSequence` (e.g. ``SeedSequence([seed, n])``
+        for the n-th continuation of a session), or ``None`` for fresh entropy.
     faults
         Faults to inject (:class:`ErrorFault`, :class:`TimeoutFault`,
         :class:`GarbageFault`, :class:`VanishFault`); more with :meth:`inject`.
@@ -295,7 +402,7 @@ class CS2000Emulator:
         self,
         radiance_source: Callable[[], np.ndarray],
         time_scale: float = 1.0,
-        seed: int | None = None,
+        seed: int | np.random.SeedSequence | None = None,
         faults: Sequence[Fault] = (),
         *,
         model: int = 1,
@@ -339,10 +446,6 @@ class CS2000Emulator:
         self._cmfs = {
             2: cmfs["CIE 1931 2 Degree Standard Observer"].copy().align(shape),
             10: cmfs["CIE 1964 10 Degree Standard Observer"].copy().align(shape),
-        }
-        self._cmf_values = {
-            degrees: np.asarray(cmfs.values, dtype=np.float64)
-            for degrees, cmfs in self._cmfs.items()
         }
 
     # ------------------------------------------------------------------ public state
@@ -658,13 +761,17 @@ class CS2000Emulator:
         except Exception:
             logger.exception("the emulator's radiance source failed; answering ER99")
             return "ER99"
-        luminance = _K_M * float(radiance @ self._cmf_values[2][:, 1])
+        luminance = radiance_to_luminance(radiance)
         mode, integration, nd = self._speed
-        floor, maximum = LUMINANCE_RANGE_CD_M2[self._angle]
+        maximum = LUMINANCE_RANGE_CD_M2[self._angle][1]
         nd_used = nd == 1 or (nd == 2 and luminance > maximum * ND_TRANSMITTANCE)
         limit = maximum if nd_used else maximum * ND_TRANSMITTANCE
-        pre_s, total_s, integration_s = self._timing(luminance, mode, integration)
-        first_due = now + pre_s * self._time_scale
+        if integration is None:
+            set_integration_s = None
+        else:  # the wire's whole seconds (modes 2, 4) or µs (mode 3)
+            set_integration_s = float(integration) if mode in (2, 4) else integration / 1e6
+        timing = measurement_timing(luminance, mode, set_integration_s, self._angle)
+        first_due = now + timing.pre_measurement_s * self._time_scale
         if luminance > limit:
             logger.info("over range: %.4g cd/m² > %.4g cd/m² (ND %s)",
                         luminance, limit, "on" if nd_used else "off")
@@ -672,12 +779,12 @@ class CS2000Emulator:
                 first_due, "ER10", first_due, None, None, terminator, started_ok=False
             )
             return None
-        countdown = int(min(242, max(2, math.ceil(total_s - 1e-9))))
+        countdown = timing.measurement_s
         measured = self._add_noise(radiance)
         conditions = (
             str(mode),
             str(self._sync[0]),
-            f"{round(integration_s * 1e6):09d}",
+            f"{round(timing.integration_s * 1e6):09d}",
             "1" if nd_used else "0",
             "0",
             "0",
@@ -696,20 +803,6 @@ class CS2000Emulator:
         )
         return None
 
-    def _timing(
-        self, luminance: float, mode: int, integration: int | None
-    ) -> tuple[float, float, float]:
-        """Return (pre-measurement s, measurement s, integration s), unscaled."""
-        floor = LUMINANCE_RANGE_CD_M2[self._angle][0]
-        equivalent = max(luminance, 1e-12) * (_FLOOR_1DEG / floor)
-        span = math.log(_BRIGHT_CD_M2 / _FLOOR_1DEG)
-        darkness = min(1.0, max(0.0, math.log(_BRIGHT_CD_M2 / equivalent) / span))
-        if mode in (0, 1):
-            total = math.exp(darkness * math.log(_MAX_S[mode]))
-            return 1.0 + 9.0 * darkness, total, total / 2
-        seconds = float(integration) if mode in (2, 4) else integration / 1e6
-        return 1.0, 2 * seconds + 1.0, seconds
-
     def _add_noise(self, radiance: np.ndarray) -> np.ndarray:
         return instrument_noise(radiance, self._rng, relative_noise=self._relative_noise,
                                 noise_floor=self._noise_floor, repeatability=self._repeatability,
@@ -718,7 +811,7 @@ class CS2000Emulator:
     def _colorimetry(self, radiance: np.ndarray) -> tuple[str, ...]:
         values: list[str] = [_fmt_e(float(radiance.sum()))]
         for degrees in (2, 10):
-            XYZ = _K_M * radiance @ self._cmf_values[degrees]
+            XYZ = _K_M * radiance @ _cmf_values(degrees)
             if degrees == 2:
                 values.append(_fmt_sig5(float(XYZ[1])))
             values += [_fmt_e(float(v)) for v in XYZ]

@@ -25,6 +25,7 @@ from __future__ import annotations
 import enum
 import math
 import re
+import string
 from dataclasses import dataclass
 
 import numpy as np
@@ -96,7 +97,8 @@ the same eleven for the CIE 1964 10° observer."""
 
 NOT_COMPUTABLE_ABS = 9.0e9
 """Values at or beyond this magnitude (the instrument sends ``-9.9999e9`` and
-similar) are placeholders for "not computable" and parse to ``None``."""
+similar) are placeholders for "not computable": colorimetric values parse to
+``None``, spectral radiance values to NaN."""
 
 ANGLE_DEGREES: dict[int, float] = {0: 1.0, 1: 0.2, 2: 0.1}
 """``STSR`` and condition code → measuring angle in degrees."""
@@ -501,6 +503,25 @@ def _parse_float(token: str) -> float:
     return float(token.strip().replace(" ", ""))
 
 
+def _excerpt(raw: bytes, limit: int = 60) -> str:
+    """``raw`` for an error message: its repr, cut after ``limit`` bytes."""
+    if len(raw) <= limit:
+        return repr(raw)
+    return f"{raw[:limit]!r}... ({len(raw)} bytes)"
+
+
+def _parse_float32_hex(token: str, position: int, raw: bytes) -> bytes:
+    """The 4 bytes of one big-endian float32 written as exactly 8 hex digits."""
+    digits = token.replace(" ", "")
+    if len(digits) != 8 or any(c not in string.hexdigits for c in digits):
+        raise ProtocolError(
+            f"spectral value {position + 1} is {token!r}, not a float32 in 8 hex digits, in the "
+            f"reply {_excerpt(raw)}",
+            raw,
+        )
+    return bytes.fromhex(digits)
+
+
 def parse_spectral_block(reply: Reply, block: int, binary: bool) -> np.ndarray:
     """Parse the reply to ``MEDR,1,0,b`` (ASCII) or ``MEDR,1,1,b`` (float32 hex).
 
@@ -511,18 +532,23 @@ def parse_spectral_block(reply: Reply, block: int, binary: bool) -> np.ndarray:
     block
         Block number 1..4 (380–479, 480–579, 580–679: 100 values; 680–780: 101).
     binary
-        ``True`` for the big-endian IEEE-754 float32 hex form (8 hex digits
-        per value), ``False`` for ASCII numbers such as ``1.2345e-3``.
+        ``True`` for the big-endian IEEE-754 float32 hex form (exactly 8 hex
+        digits per value), ``False`` for ASCII numbers such as ``1.2345e-3``.
 
     Returns
     -------
     numpy.ndarray
-        Spectral radiance in W·sr⁻¹·m⁻²·nm⁻¹, float64.
+        Spectral radiance in W·sr⁻¹·m⁻²·nm⁻¹, float64; NaN where the
+        instrument sent its "not computable" placeholder (a magnitude of at
+        least :data:`NOT_COMPUTABLE_ABS`, such as ``-9.9999e9``) or a
+        non-finite value.
 
     Raises
     ------
     ProtocolError
-        If the number of values is wrong or a value does not parse.
+        If the number of values is wrong or a value does not parse (a hex
+        value with more or fewer than 8 digits included); the message quotes
+        the reply.
     """
     start, count = SPECTRAL_BLOCKS[block]
     fields = reply.fields
@@ -532,16 +558,17 @@ def parse_spectral_block(reply: Reply, block: int, binary: bool) -> np.ndarray:
             f"values, expected {count}",
             reply.raw,
         )
-    try:
-        if binary:
-            hexdigits = "".join(f.replace(" ", "").zfill(8) for f in fields)
-            if len(hexdigits) != 8 * count:
-                raise ValueError("a value is longer than 8 hex digits")
-            values = np.frombuffer(bytes.fromhex(hexdigits), dtype=">f4").astype(np.float64)
-        else:
+    if binary:
+        data = b"".join(_parse_float32_hex(f, i, reply.raw) for i, f in enumerate(fields))
+        values = np.frombuffer(data, dtype=">f4").astype(np.float64)
+    else:
+        try:
             values = np.array([_parse_float(f) for f in fields], dtype=np.float64)
-    except ValueError as exc:
-        raise ProtocolError(f"spectral block {block}: {exc}", reply.raw) from exc
+        except ValueError as exc:
+            raise ProtocolError(
+                f"spectral block {block}: {exc}, in the reply {_excerpt(reply.raw)}", reply.raw
+            ) from exc
+    values[~(np.abs(values) < NOT_COMPUTABLE_ABS)] = np.nan  # placeholders, ±inf and NaN
     return values
 
 

@@ -39,8 +39,10 @@ def test_a_worker_thread_shows_patches_and_gets_control_back_once_painted(qtbot)
     def worker():
         try:
             for rgb in ([255, 0, 0], [10, 200, 30]):
+                paints = window.paint_count
                 display.show(rgb)
-                assert window.rgb == rgb  # painted before show returned
+                # painted before show returned (window.rgb is set before the paint, so it proves nothing)
+                assert window.last_painted == rgb and window.paint_count > paints
         except Exception as error:  # noqa: BLE001 - reported below
             errors.append(error)
 
@@ -54,7 +56,11 @@ def test_a_worker_thread_shows_patches_and_gets_control_back_once_painted(qtbot)
 def test_show_from_the_gui_thread_is_immediate(qtbot):
     window = PatchWindow(0)
     qtbot.addWidget(window)
-    QtPatchDisplay(window).show([1, 2, 3])
+    display = QtPatchDisplay(window)
+    qtbot.waitUntil(lambda: window.paint_count > 0)  # exposed: until then repaint() has nowhere to paint
+    paints = window.paint_count
+    display.show([1, 2, 3])
+    assert window.last_painted == [1, 2, 3] and window.paint_count > paints  # painted before show returned
     assert window.rgb == [1, 2, 3] and _colour_at_centre(window) == [1, 2, 3]
 
 

@@ -8,7 +8,15 @@ import colour
 import numpy as np
 import pytest
 
-from instruments.cs2000 import CS2000Emulator, ErrorFault, GarbageFault, TimeoutFault, VanishFault
+from instruments.cs2000 import (
+    CS2000Emulator,
+    ErrorFault,
+    GarbageFault,
+    TimeoutFault,
+    VanishFault,
+    measurement_timing,
+    radiance_to_luminance,
+)
 from instruments.cs2000.emulator import LUMINANCE_RANGE_CD_M2, ND_TRANSMITTANCE
 
 SHAPE = colour.SpectralShape(380, 780, 1)
@@ -185,6 +193,35 @@ def test_integration_grows_at_low_luminance_up_to_the_limit():
     assert _timing(0.003, b"SPMS,1,2")[1] == 16
     assert _timing(0.01, b"SPMS,3,002000000,2") == (1.0, 5)  # manual: 2 × 2 s + 1 s
     assert _timing(0.01, b"SPMS,2,10,2") == (1.0, 21)
+
+
+@pytest.mark.parametrize(("luminance", "speed", "mode", "integration_s"), [
+    (500.0, b"SPMS,0,2", 0, None), (1.0, b"SPMS,0,2", 0, None), (0.01, b"SPMS,0,2", 0, None),
+    (0.0005, b"SPMS,0,2", 0, None), (0.01, b"SPMS,1,2", 1, None), (0.01, b"SPMS,3,002000000,2", 3, 2.0),
+    (0.01, b"SPMS,2,10,2", 2, 10.0), (3.0, b"SPMS,4,03,2", 4, 3.0),
+])  # fmt: skip
+def test_measurement_timing_is_what_the_emulator_does(luminance, speed, mode, integration_s):
+    pre, countdown = _timing(luminance, speed)
+    timing = measurement_timing(radiance_to_luminance(radiance_for(luminance)), mode, integration_s)
+    assert (timing.pre_measurement_s, timing.measurement_s) == (pre, countdown)
+    assert timing.duration_s == pre + countdown
+    emulator = make(luminance=luminance, time_scale=1.0)
+    emulator.feed(speed + b"\r\n", 0.0)
+    emulator.feed(b"MEAS,1\r\n", 0.0)
+    emulator.poll(pre)
+    assert emulator.next_event_time() == timing.duration_s
+    emulator.poll(timing.duration_s)
+    conditions = fields(emulator.feed(b"MEDR,0,0,1\r\n", timing.duration_s))
+    assert int(conditions[2]) == round(timing.integration_s * 1e6)
+
+
+def test_measurement_timing_scales_the_floor_with_the_angle():
+    floor_01 = LUMINANCE_RANGE_CD_M2[2][0]
+    assert measurement_timing(floor_01, angle=2).measurement_s == 242
+    assert measurement_timing(floor_01, angle=0).measurement_s < 242
+    assert radiance_to_luminance(radiance_for(42.0)) == pytest.approx(42.0, rel=1e-9)
+    with pytest.raises(ValueError, match="needs integration_s"):
+        measurement_timing(1.0, mode=3)
 
 
 def test_cancel_with_meas_0():

@@ -3,7 +3,10 @@
 A fake transport asserts the exact bytes the driver sends, feeds canned
 replies, and checks at the end that every exchange was used. Time is a fake
 clock advanced by the transport's read timeout, so deadlines are exercised
-without waiting.
+without waiting. Replies can be scripted at fake-clock times (the two lines of
+``MEAS,1`` come seconds apart, as from the instrument), and the transport fails
+the test if the driver writes anything while a scripted line is still due
+(``MEAS,0``, which stops the measurement, excepted).
 """
 
 from __future__ import annotations
@@ -56,11 +59,17 @@ class FakeClock:
 
 
 class FakeTransport:
-    """Serial-like double: checks each command byte for byte, then queues its reply.
+    """Serial-like double: checks each command byte for byte, then delivers its reply.
 
-    ``chunk`` limits how many bytes one read returns (1 = byte by byte). An
-    empty read advances the fake clock by ``timeout``, as a real port would
-    block for it.
+    A reply is either bytes, available at once, or a list of ``(delay_s,
+    line)`` that the instrument sends ``delay_s`` after the command, on the
+    fake clock. A read with nothing available blocks as a real port would:
+    for ``timeout`` seconds of fake time, or until the next scripted line
+    falls due. Writing while a scripted line is still due fails the test, as
+    design §6 forbids it, except ``MEAS,0``, which stops the measurement (its
+    pending lines are then never sent).
+
+    ``chunk`` limits how many bytes one read returns (1 = byte by byte).
     """
 
     def __init__(self, exchanges, clock: FakeClock, chunk: int | None = None) -> None:
@@ -70,31 +79,56 @@ class FakeTransport:
         self.timeout = None
         self.sent = bytearray()
         self.rx = bytearray()
+        self.pending: list[tuple[float, bytes]] = []  # (due time, line), in time order
         self.writes: list[bytes] = []
+        self.write_times: list[tuple[float, bytes]] = []
         self.on_read = None
+
+    def _release(self) -> None:
+        while self.pending and self.pending[0][0] <= self.clock.now:
+            self.rx += self.pending.pop(0)[1]
 
     @property
     def in_waiting(self) -> int:
+        self._release()
         return min(len(self.rx), self.chunk) if self.chunk else len(self.rx)
 
     def write(self, data: bytes) -> int:
+        self._release()
+        if self.pending and not (bytes(self.sent) + data).startswith(b"MEAS,0"):
+            due, line = self.pending[0]
+            raise AssertionError(f"wrote {bytes(data)!r} at t={self.clock.now:.2f} s while the instrument's "
+                                 f"line {line!r} was still due at t={due:.2f} s")
         self.sent += data
         assert self.exchanges, f"unexpected write {bytes(self.sent)!r}: no exchange left"
         expected, reply = self.exchanges[0]
         assert expected.startswith(bytes(self.sent)), f"sent {bytes(self.sent)!r}, expected {expected!r}"
         if bytes(self.sent) == expected:
             self.writes.append(expected)
+            self.write_times.append((self.clock.now, expected))
             self.exchanges.pop(0)
             self.sent.clear()
-            self.rx += reply
+            if expected.startswith(b"MEAS,0"):
+                self.pending.clear()  # the measurement is stopped: its lines never come
+            if isinstance(reply, bytes):
+                self.rx += reply
+            else:
+                self.pending += [(self.clock.now + delay, line) for delay, line in reply]
+                self.pending.sort(key=lambda item: item[0])
         return len(data)
 
     def read(self, n: int = 1) -> bytes:
         if self.on_read is not None:
             self.on_read()
+        self._release()
         if not self.rx:
-            self.clock.now += self.timeout or 0.05
-            return b""
+            timeout = self.timeout or 0.05
+            if self.pending and self.pending[0][0] <= self.clock.now + timeout:
+                self.clock.now = self.pending[0][0]  # a line arrives while the read blocks
+                self._release()
+            else:
+                self.clock.now += timeout
+                return b""
         n = min(n, self.chunk) if self.chunk else n
         data = bytes(self.rx[:n])
         del self.rx[:n]
@@ -104,6 +138,7 @@ class FakeTransport:
         assert not self.exchanges, f"exchanges never used: {self.exchanges}"
         assert not self.sent, f"incomplete command sent: {bytes(self.sent)!r}"
         assert not self.rx.strip(b"\r\n"), f"replies never read: {bytes(self.rx)!r}"
+        assert not self.pending, f"scripted lines never sent: {self.pending}"
 
 
 @contextmanager
@@ -381,11 +416,18 @@ def test_unknown_error_code_is_still_an_error():
 # ----------------------------------------------------------------------------- measuring
 
 
+def measuring(countdown: int, pre_s: float = 1.0, end: bytes = b"OK00\r\n"):
+    """The two ``MEAS,1`` lines as the instrument sends them: after the pre-measurement, then ``ttt`` later."""
+    return [(pre_s, f"OK00,{countdown:03d}\r\n".encode()), (pre_s + countdown, end)]
+
+
 def test_measure_reads_all_blocks_and_colorimetry():
     progress = []
-    exchanges = [(b"MEAS,1\r\n", b"OK00,003\r\nOK00\r\n"), *readout()]
+    exchanges = [(b"MEAS,1\r\n", measuring(3, pre_s=1.5)), *readout()]
     with expected_protocol(exchanges) as cs:
         m = cs.measure(progress=lambda left, total: progress.append((left, total)))
+        first_read = min(t for t, command in cs.transport.write_times if command.startswith(b"MEDR"))
+    assert first_read >= 1.5 + 3  # nothing was sent before the second line
     np.testing.assert_array_equal(m.wavelengths, np.arange(380, 781))
     assert m.radiance.shape == (401,)
     np.testing.assert_allclose(m.radiance, RADIANCE, rtol=1e-4)
@@ -399,12 +441,14 @@ def test_measure_reads_all_blocks_and_colorimetry():
     assert m.nd_used is True
     assert m.measurement_time_s == 3
     assert progress[0] == (3.0, 3.0) and progress[-1] == (0.0, 3.0)
+    remaining = [left for left, _ in progress]
+    assert remaining == sorted(remaining, reverse=True) and len(remaining) >= 4  # about once a second
     with pytest.raises(ValueError):
         m.radiance[0] = 1.0  # results are immutable
 
 
 def test_measure_with_float32_hex_spectra():
-    exchanges = [(b"MEAS,1\r\n", b"OK00,002\r\nOK00\r\n"), *readout(binary=True)]
+    exchanges = [(b"MEAS,1\r\n", measuring(2)), *readout(binary=True)]
     with expected_protocol(exchanges, spectral_format="float32") as cs:
         m = cs.measure()
     np.testing.assert_allclose(m.radiance, RADIANCE.astype(np.float32), rtol=0)
@@ -439,12 +483,12 @@ def test_colorimetry_placeholders_become_none_and_nan():
 
 @pytest.mark.parametrize("line", [1, 2])
 def test_over_range_is_retried_once_with_the_nd_filter(line):
-    first = b"ER10\r\n" if line == 1 else b"OK00,002\r\nER10\r\n"
+    first = [(1.0, b"ER10\r\n")] if line == 1 else measuring(2, end=b"ER10\r\n")
     exchanges = [
         (b"MEAS,1\r\n", first),
         (b"SPMR\r\n", b"OK00,0,0\r\n"),
         (b"SPMS,0,1\r\n", b"OK00\r\n"),
-        (b"MEAS,1\r\n", b"OK00,002\r\nOK00\r\n"),
+        (b"MEAS,1\r\n", measuring(2)),
         *readout(conditions="0,0,000100000,1,0,0,0,00"),
         (b"SPMS,0,0\r\n", b"OK00\r\n"),  # the previous speed mode, restored
     ]
@@ -488,11 +532,12 @@ def test_measure_error_on_the_first_line_sends_nothing_more(code, cls):
 def test_cancel_sends_meas_0(as_callable):
     event = threading.Event()
     cancel = event.is_set if as_callable else event
-    exchanges = [(b"MEAS,1\r\n", b"OK00,010\r\n"), (b"MEAS,0\r\n", b"OK00\r\n")]
+    exchanges = [(b"MEAS,1\r\n", measuring(10)), (b"MEAS,0\r\n", b"OK00\r\n")]
     with expected_protocol(exchanges) as cs:
         with pytest.raises(MeasurementCancelled):
             cs.measure(progress=lambda left, total: event.set(), cancel=cancel)
         assert cs.transport.writes[-1] == b"MEAS,0\r\n"
+        assert cs.transport.write_times[-1][0] < 1.0 + 10  # sent while measuring: the measurement stopped
 
 
 def test_cancel_during_the_pre_measurement_skips_the_late_countdown():
@@ -530,12 +575,13 @@ def test_a_garbled_countdown_stops_the_instrument():
 
 
 def test_missing_second_line_times_out_after_ttt_plus_margin():
-    exchanges = [(b"MEAS,1\r\n", b"OK00,005\r\n"), (b"MEAS,0\r\n", b"OK00\r\n")]
+    exchanges = [(b"MEAS,1\r\n", [(0.5, b"OK00,005\r\n")]), (b"MEAS,0\r\n", b"OK00\r\n")]
     with expected_protocol(exchanges, timeout_s=1.0) as cs:
         with pytest.raises(CS2000Timeout) as info:
             cs.measure()
         assert cs.transport.clock.now >= 5 + 1.0  # waited ttt + margin, not less
         assert cs.transport.clock.now < 5 + 1.0 + 1.0 + 0.2
+        assert cs.transport.write_times[-1][0] >= 0.5 + 5 + 1.0  # ttt + margin after the countdown line
     assert "MEAS,1" in str(info.value) and "end of the 5 s measurement" in str(info.value)
 
 
@@ -605,3 +651,141 @@ def test_open_cs2000_lists_candidates_when_ambiguous_or_absent(monkeypatch):
     monkeypatch.setattr(driver_module.list_ports, "comports", lambda: [_port("/dev/ttyS0")])
     with pytest.raises(PortSelectionError, match="no CS-2000.*/dev/ttyS0"):
         open_cs2000()
+
+
+# ----------------------------------------------------------------------------- scripted timing
+
+
+def test_the_fake_transport_refuses_a_command_while_a_line_is_due():
+    clock = FakeClock()
+    transport = FakeTransport([(b"MEAS,1\r\n", measuring(5)), (b"IDDR\r\n", IDDR_REPLY + b"\r\n")], clock)
+    transport.write(b"MEAS,1\r\n")
+    with pytest.raises(AssertionError, match=r"wrote b'IDDR\\r\\n' at t=0.00 s while .*OK00,005"):
+        transport.write(b"IDDR\r\n")
+    clock.now = 6.0  # both lines have come
+    transport.write(b"IDDR\r\n")
+
+
+def test_no_command_is_sent_before_the_second_line_of_a_long_measurement():
+    exchanges = [(b"MEAS,1\r\n", measuring(30, pre_s=7.5)), *readout(), (b"IDDR\r\n", IDDR_REPLY + b"\r\n")]
+    with expected_protocol(exchanges) as cs:  # the transport fails on any write while a line is due
+        cs.measure()
+        cs.identify()
+        writes = cs.transport.write_times
+    assert [command for _, command in writes][:2] == [b"MEAS,1\r\n", b"MEDR,1,0,1\r\n"]
+    assert writes[1][0] >= 7.5 + 30
+
+
+# ----------------------------------------------------------------------------- MEAS,0 acknowledgements
+
+
+def test_an_error_answer_to_the_cancel_is_logged_and_the_cancel_still_stands(caplog):
+    event = threading.Event()
+    exchanges = [(b"MEAS,1\r\n", measuring(10)), (b"MEAS,0\r\n", b"ER17\r\n")]
+    with caplog.at_level(logging.WARNING, logger="instruments.cs2000"):
+        with expected_protocol(exchanges) as cs:
+            with pytest.raises(MeasurementCancelled):
+                cs.measure(progress=lambda left, total: event.set(), cancel=event)
+    assert "MEAS,0 answered ER17" in caplog.text
+
+
+def test_an_unacknowledged_stop_does_not_mask_the_timeout(caplog):
+    exchanges = [(b"MEAS,1\r\n", [(0.5, b"OK00,002\r\n")]), (b"MEAS,0\r\n", b"")]
+    with caplog.at_level(logging.WARNING, logger="instruments.cs2000"):
+        with expected_protocol(exchanges, timeout_s=1.0) as cs:
+            with pytest.raises(CS2000Timeout, match="end of the 2 s measurement"):
+                cs.measure()
+    assert "MEAS,0 got no clean acknowledgement" in caplog.text
+
+
+# ----------------------------------------------------------------------------- not computable
+
+
+def test_spectral_placeholders_become_nan():
+    fields = [f"{v:.4e}" for v in RADIANCE[:100]]
+    fields[0], fields[7], fields[99] = "-9.9999e9", "9.9999E+09", "-9.9999e+9"
+    values = parse_spectral_block(parse_reply(("OK00," + ",".join(fields)).encode()), 1, binary=False)
+    assert np.isnan(values[[0, 7, 99]]).all()
+    finite = np.delete(np.arange(100), [0, 7, 99])
+    np.testing.assert_allclose(values[finite], RADIANCE[finite], rtol=1e-4)
+    hexes = [np.array(v, dtype=">f4").tobytes().hex().upper() for v in RADIANCE[100:200]]
+    hexes[3] = np.array(-9.9999e9, dtype=">f4").tobytes().hex().upper()
+    values = parse_spectral_block(parse_reply(("OK00," + ",".join(hexes)).encode()), 2, binary=True)
+    assert np.isnan(values[3]) and np.isfinite(np.delete(values, 3)).all()
+
+
+def test_a_measurement_with_a_not_computable_spectral_value_reads_it_as_nan():
+    fields = spectral_reply(1).strip()[len(b"OK00,"):].split(b",")
+    fields[0] = b"-9.9999e9"
+    block = b"OK00," + b",".join(fields) + b"\r\n"
+    exchanges = [(b"MEAS,1\r\n", measuring(2)), (b"MEDR,1,0,1\r\n", block), *readout()[1:]]
+    with expected_protocol(exchanges) as cs:
+        m = cs.measure()
+    assert np.isnan(m.radiance[0]) and np.isfinite(m.radiance[1:]).all()
+    np.testing.assert_allclose(m.radiance[1:], RADIANCE[1:], rtol=1e-4)
+    np.testing.assert_allclose(m.XYZ, [126.20, 133.99, 113.34])  # the colorimetric values are kept
+
+
+@pytest.mark.parametrize("bad", ["3A83126", "3A83126F0", "3A83126G", "0x3A8312"])
+def test_a_float32_value_must_have_exactly_eight_hex_digits(bad):
+    hexes = [np.array(v, dtype=">f4").tobytes().hex().upper() for v in RADIANCE[:100]]
+    hexes[41] = bad
+    raw = ("OK00," + ",".join(hexes)).encode()
+    with pytest.raises(ProtocolError) as info:
+        parse_spectral_block(parse_reply(raw), 1, binary=True)
+    message = str(info.value)
+    assert f"spectral value 42 is '{bad}'" in message and "8 hex digits" in message
+    assert repr(raw[:60]) in message  # names the reply
+    assert info.value.raw_reply == raw
+
+
+# ----------------------------------------------------------------------------- remote mode fallbacks
+
+
+def test_rmts_2_if_supported():
+    with expected_protocol([(b"RMTS,2\r\n", b"OK00\r\n"), (b"RMTS,0\r\n", b"OK00\r\n")],
+                           no_flash_write="if-supported") as cs:  # fmt: skip
+        with cs:
+            assert cs.remote_mode == 2
+        assert cs.remote_mode == 0
+
+
+def test_an_error_answer_to_rmts_2_falls_back_to_rmts_1(caplog):
+    exchanges = [(b"RMTS,2\r\n", b"ER00\r\n"), (b"RMTS,1\r\n", b"OK00\r\n"), (b"RMTS,0\r\n", b"OK00\r\n")]
+    with caplog.at_level(logging.INFO, logger="instruments.cs2000"):
+        with expected_protocol(exchanges, no_flash_write="if-supported") as cs:
+            with cs:
+                assert cs.remote_mode == 1
+    assert "RMTS,2 answered ER00" in caplog.text
+
+
+def test_no_fallback_when_rmts_2_was_required_or_the_link_failed():
+    with expected_protocol([(b"RMTS,2\r\n", b"ER00\r\n")], no_flash_write=True) as cs:
+        with pytest.raises(CS2000Error, match="ER00"):
+            with cs:
+                pass
+    with expected_protocol([(b"RMTS,2\r\n", b"")], no_flash_write="if-supported") as cs:
+        with pytest.raises(CS2000Timeout, match="RMTS,2"):
+            with cs:
+                pass
+    with pytest.raises(ValueError, match="no_flash_write"):
+        CS2000(FakeTransport([], FakeClock()), no_flash_write="sometimes")
+
+
+def test_a_failing_rmts_0_after_a_clean_block_is_only_a_warning(caplog):
+    exchanges = [(b"RMTS,1\r\n", b"OK00\r\n"), (b"IDDR\r\n", IDDR_REPLY + b"\r\n"), (b"RMTS,0\r\n", b"ER99\r\n")]
+    with caplog.at_level(logging.WARNING, logger="instruments.cs2000"):
+        with expected_protocol(exchanges) as cs:
+            with cs:
+                assert cs.identify().serial == "10001234"
+    assert "could not leave remote mode (RMTS,0)" in caplog.text and "ER99" in caplog.text
+
+
+def test_a_failing_rmts_0_does_not_mask_the_blocks_own_error(caplog):
+    exchanges = [(b"RMTS,1\r\n", b"OK00\r\n"), (b"IDDR\r\n", b"ER83\r\n"), (b"RMTS,0\r\n", b"ER99\r\n")]
+    with caplog.at_level(logging.WARNING, logger="instruments.cs2000"):
+        with expected_protocol(exchanges) as cs:
+            with pytest.raises(AngleKnobError):
+                with cs:
+                    cs.identify()
+    assert "ER99" in caplog.text

@@ -70,6 +70,41 @@ def test_identify_and_measure_over_a_pty():
     assert remaining == sorted(remaining, reverse=True) and remaining[-1] == 0.0
 
 
+class WatchedEmulator(CS2000Emulator):
+    """Notes how many commands had arrived each time a measurement ended, and any command fed mid-measurement."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.received_at_end: list[int] = []
+        self.fed_while_measuring: list[bytes] = []
+
+    def feed(self, data, now):
+        if self.measuring:
+            self.fed_while_measuring.append(bytes(data))
+        return super().feed(data, now)
+
+    def poll(self, now):
+        was_measuring = self.measuring
+        out = super().poll(now)
+        if was_measuring and not self.measuring:
+            self.received_at_end.append(len(self.received))
+        return out
+
+
+def test_no_command_reaches_the_emulator_between_meas_1_and_the_end_of_the_measurement():
+    emulator = WatchedEmulator(lambda: radiance_for(0.1), time_scale=0.01, seed=3)
+    with serve_on_pty(emulator) as server, CS2000(server.port, timeout_s=2.0) as cs:
+        started = time.monotonic()
+        m = cs.measure(progress=lambda left, total: None)
+        took = time.monotonic() - started
+        cs.identify()
+    # when the measurement ended the emulator had received RMTS,1 and MEAS,1, nothing after MEAS,1
+    assert emulator.received_at_end == [2] and emulator.received[1] == "MEAS,1"
+    assert m.measurement_time_s == 39 and took >= (6.9 + 39) * 0.01  # it really waited (scaled)
+    assert emulator.fed_while_measuring == []
+    assert emulator.received[:3] == ["RMTS,1", "MEAS,1", "MEDR,1,0,1"]
+
+
 def test_float32_spectra_and_settings_over_a_pty():
     emulator, server = served(luminance=3.0)
     with server, CS2000(server.port, timeout_s=2.0, spectral_format="float32", no_flash_write=True) as cs:

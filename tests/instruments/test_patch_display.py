@@ -6,6 +6,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -21,6 +22,7 @@ from instruments.patch_display import (
     validate_patch_rgb,
 )
 from instruments.patch_server import PatchServer
+from instruments.patch_server import main as patch_server_main
 
 
 @pytest.fixture
@@ -158,6 +160,67 @@ def test_closing_the_server_drops_a_connected_client_at_once(headset):
     assert not closer.is_alive()
     with pytest.raises(PatchDisplayError):
         display.show([1, 1, 1])
+
+
+class RecordingServer(PatchServer):
+    """A reference server that records the commands it answers, in order."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.commands = []
+
+    def answer(self, line):
+        self.commands.append(json.loads(line).get("cmd"))
+        return super().answer(line)
+
+
+def test_a_connection_dropped_while_idle_is_reconnected_once_with_hello(headset):
+    with RecordingServer(headset.show, idle_timeout_s=0.1) as server:
+        server.start()
+        with TcpPatchDisplay(*server.address, timeout_s=2.0) as display:
+            display.show([1, 2, 3])
+            deadline = time.monotonic() + 5.0
+            while server.client_socket.fileno() != -1 and time.monotonic() < deadline:
+                time.sleep(0.02)  # a long pause: the server drops the silent client
+            assert server.client_socket.fileno() == -1, "the server did not drop the idle client"
+            display.show([9, 8, 7])
+            assert np.array_equal(headset.shown, [9, 8, 7])
+    assert server.commands[:4] == ["hello", "show", "hello", "show"]
+
+
+def test_a_server_that_drops_every_show_fails_after_one_reconnection():
+    listener = socket.create_server(("127.0.0.1", 0))
+    connections = []
+
+    def serve():
+        for _ in range(3):
+            try:
+                conn, _ = listener.accept()
+            except OSError:
+                return
+            connections.append(conn)
+            stream = conn.makefile("rb")
+            request = json.loads(stream.readline())  # hello
+            conn.sendall(json.dumps({"ok": True, "id": request["id"], "protocol": PATCH_PROTOCOL}).encode() + b"\n")
+            stream.readline()  # show: hang up instead of answering
+            stream.close()
+            conn.close()
+
+    threading.Thread(target=serve, daemon=True).start()
+    try:
+        display = TcpPatchDisplay("127.0.0.1", listener.getsockname()[1], timeout_s=2.0)
+        with pytest.raises(PatchDisplayError, match="closed the connection during 'show'"):
+            display.show([1, 2, 3])
+        assert len(connections) == 2  # the first and one reconnection, no more
+    finally:
+        listener.close()
+
+
+def test_the_idle_timeout_help_gives_the_real_default(capsys):
+    with pytest.raises(SystemExit):
+        patch_server_main(["--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "(default 600)" in help_text and "(default 60)" not in help_text
 
 
 def test_simulated_and_mirrored_displays(headset):

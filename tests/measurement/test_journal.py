@@ -10,6 +10,7 @@ from workbench import __version__
 from workbench.errors import SpectrumFileError
 from workbench.measurement.journal import (
     JOURNAL_FORMAT,
+    JournalBusyError,
     JournalHeader,
     JournalRecord,
     JournalWriter,
@@ -146,3 +147,50 @@ def test_journal_to_session_keeps_ok_rows_in_plan_order_with_spectra(tmp_path):
     assert np.allclose(session.XYZ[:, 0], [1.0, 3.0])
     assert session.spectra.shape == (2, 401) and session.wavelengths[0] == 380
     assert np.allclose(session.t_s, [0.0, 2.0])
+
+
+def test_a_second_writer_is_refused_while_the_first_is_open(tmp_path):
+    path = tmp_path / "journal.jsonl"
+    with JournalWriter.create(path, _header()) as first:
+        first.write_record(_record(0))
+        with pytest.raises(JournalBusyError, match=f"another measure run is writing {path}; wait for it or stop it"):
+            JournalWriter.append_to(read_journal(path))
+        with pytest.raises(JournalBusyError, match="another measure run is writing"):
+            JournalWriter.create(path, _header())  # not "add --resume": that would be refused too
+        first.write_record(_record(1))
+    assert [r.index for r in read_journal(path).records] == [0, 1]  # the refused writers wrote nothing
+    with JournalWriter.append_to(read_journal(path)) as second:  # the lock went with the first writer
+        second.write_record(_record(2))
+        with pytest.raises(JournalBusyError):
+            JournalWriter.append_to(read_journal(path))
+    assert [r.index for r in read_journal(path).records] == [0, 1, 2]
+
+
+def test_a_journal_that_changed_since_it_was_read_is_not_cut(tmp_path):
+    path = tmp_path / "journal.jsonl"
+    _write(path, [_record(0)])
+    stale = read_journal(path)
+    with JournalWriter.append_to(read_journal(path)) as other:
+        other.write_record(_record(1))
+    before = path.read_bytes()
+    with pytest.raises(JournalBusyError, match="changed while this run was starting"):
+        JournalWriter.append_to(stale)
+    assert path.read_bytes() == before
+
+
+def test_a_record_warning_round_trips_and_the_writer_returns_the_record_as_stored(tmp_path):
+    path = tmp_path / "journal.jsonl"
+    patch = _header().plan.patches[0]
+    record = JournalRecord(0, patch.kind, patch.rgb, "ok", t_s=0.0, duration_s=1.0, XYZ=(0.1, 0.1, 0.1), Lv=0.1,
+                           warning="the instrument could not compute the spectral radiance at 1 of 401 wavelengths")
+    with JournalWriter.create(path, _header()) as writer:
+        stored = writer.write_record(record)
+        noisy = _record(1)
+        noisy = JournalRecord(**{**noisy.__dict__, "spectrum": noisy.spectrum + 1.234567891e-9})
+        stored_noisy = writer.write_record(noisy)
+    (read_back, read_noisy) = read_journal(path).records
+    assert read_back.warning == record.warning and read_back.spectrum is None
+    assert json.loads(path.read_text().splitlines()[1])["warning"] == record.warning
+    assert stored == read_back
+    assert np.array_equal(stored_noisy.spectrum, read_noisy.spectrum)  # rounded as written
+    assert not np.array_equal(noisy.spectrum, read_noisy.spectrum)

@@ -22,7 +22,7 @@ from workbench.measurement.runner import (
     RunResumed,
     RunStarted,
 )
-from workbench.session import read_session_csv
+from workbench.session import read_session_csv, write_session_csv
 
 from .conftest import RecordingDisplay, ScriptedMeter
 
@@ -192,20 +192,91 @@ def test_resume_refuses_another_plan_or_instrument(tmp_path, display, meter, hea
         MeasurementRun.resume_session(tmp_path, display, ScriptedMeter(headset, serial="0002"))
 
 
+class FakeWallClock:
+    """A monotonic clock that moves only when the (fake) instrument takes time."""
+
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
 def test_the_eta_appears_after_the_first_patch_and_counts_dark_patches_longer(tmp_path, display, headset):
-    import time
+    wall = FakeWallClock()
 
     class SlowInTheDark(ScriptedMeter):
         def measure(self, progress=None, cancel=None):
             result = super().measure(progress, cancel)
-            time.sleep(0.02 if result.Lv < 1.0 else 0.0)
+            wall.now += 20.0 if result.Lv < 1.0 else 1.0  # seconds the instrument takes, on the injected clock
             return result
 
-    starts = [e for e in MeasurementRun.start(tmp_path, PLAN, display, SlowInTheDark(headset)).events()
-              if isinstance(e, PatchStarted)]
+    run = MeasurementRun.start(tmp_path, PLAN, display, SlowInTheDark(headset), wall_clock=wall)
+    events = list(run.events())
+    starts = [e for e in events if isinstance(e, PatchStarted)]
     assert starts[0].eta_s is None
     assert all(e.eta_s is not None and e.eta_s >= 0 for e in starts[1:])
     # after the ramps, the remaining validation colours and whites are brighter: the ETA per patch drops
     first_validation = next(e for e in starts if e.patch.kind == "validation")
     remaining = len(PLAN) - first_validation.index
     assert first_validation.eta_s / remaining < starts[1].eta_s / (len(PLAN) - 1)
+    assert events[-1].summary.wall_s == wall.now - 100.0  # the run's wall time is the injected clock's too
+
+
+class NotComputableSpectrum(ScriptedMeter):
+    """Sends NaN (the driver's reading of "-9.9999e9") at 380-384 nm on call ``spectrum_on``;
+    also NaN XYZ when ``xyz_too``."""
+
+    def __init__(self, headset, spectrum_on, xyz_too=False):
+        super().__init__(headset)
+        self.spectrum_on, self.xyz_too = spectrum_on, xyz_too
+
+    def measure(self, progress=None, cancel=None):
+        result = super().measure(progress, cancel)
+        if self.calls == self.spectrum_on:
+            result.radiance = result.radiance.copy()
+            result.radiance[:5] = np.nan
+            if self.xyz_too:
+                result.XYZ = np.full(3, np.nan)
+        return result
+
+
+def test_a_spectrum_that_is_not_computable_is_left_out_with_a_warning_and_xyz_kept(tmp_path, display, headset):
+    summary = _run_all(MeasurementRun.start(tmp_path, PLAN, display, NotComputableSpectrum(headset, 4)))[-1].summary
+    assert summary.measured == len(PLAN) and summary.failed == ()
+    journal = read_journal(tmp_path / JOURNAL_NAME)
+    record = journal.records[3]
+    assert record.ok and record.spectrum is None and record.XYZ is not None and record.Lv > 0
+    assert "could not compute the spectral radiance at 5 of 401 wavelengths (380-384 nm)" in record.warning
+    assert "spectrum is left out" in record.warning
+    assert all(r.warning == "" and r.spectrum is not None for r in journal.records if r.index != 3)
+    assert len(read_session_csv(tmp_path / "session.csv")) == len(PLAN)
+
+
+def test_a_patch_whose_xyz_and_spectrum_are_not_computable_fails_with_both_reasons(tmp_path, display, headset):
+    meter = NotComputableSpectrum(headset, 4, xyz_too=True)
+    summary = _run_all(MeasurementRun.start(tmp_path, PLAN, display, meter))[-1].summary
+    (failed,) = summary.failed
+    assert failed.index == 3 and "could not compute XYZ" in failed.reason
+    assert "spectral radiance at 5 of 401 wavelengths (380-384 nm)" in failed.reason
+
+
+def test_a_resume_uses_the_journal_it_is_given(tmp_path, display, meter, headset, monkeypatch):
+    import workbench.measurement.runner as runner_module
+
+    run = MeasurementRun.start(tmp_path, PLAN, display, meter)
+    for event in run.events():
+        if isinstance(event, PatchMeasured) and event.done == 3:
+            run.cancel()
+    journal = read_journal(tmp_path / JOURNAL_NAME)
+    monkeypatch.setattr(runner_module, "read_journal", lambda path: pytest.fail("the journal was read again"))
+    run = MeasurementRun.resume_session(tmp_path, display, ScriptedMeter(headset), journal=journal,
+                                        resume_details={"note": "test"})
+    summary = _run_all(run)[-1].summary
+    assert summary.measured == len(PLAN)
+    monkeypatch.undo()
+    again = read_journal(tmp_path / JOURNAL_NAME)
+    assert again.resumes[-1]["note"] == "test" and again.resumes[-1]["measured_before"] == 3
+    # the session CSV, written from memory, is byte for byte what the journal on disk gives
+    expected = write_session_csv(journal_module.journal_to_session(again), tmp_path / "from-disk.csv")
+    assert (tmp_path / "session.csv").read_bytes() == expected.read_bytes()

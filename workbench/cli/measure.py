@@ -2,7 +2,7 @@
 
 ::
 
-    vr-workbench measure (--simulate [--effect ID[:MAGNITUDE]]... [--time-scale S] | --port DEVICE)
+    vr-workbench measure (--simulate [--effect ID[:MAGNITUDE]]... [--time-scale S] | --port DEVICE|auto)
                          [--display simulated|window[:SCREEN]|tcp:HOST:PORT]
                          [--plan paper|quick | --plan-file FILE]
                          [--seed N] --out DIR [--resume]
@@ -19,7 +19,20 @@ paper, plus the ``--effect`` given), the CS-2000 emulator measures it on a
 pseudo-terminal, and the real driver talks to that. The journal's times are
 then the instrument's modelled times; ``--time-scale`` only sets how long the
 emulator makes the run wait (0: not at all, 1: real timing). ``--seed`` seeds
-the validation colours and the instrument noise.
+the validation colours and the instrument noise (with ``--plan-file`` too;
+without ``--seed`` a fresh noise seed is drawn), and the journal keeps it.
+A resumed simulation draws its noise from ``SeedSequence([seed, k])`` for
+its k-th resume, recorded in the journal's resume record, so that it does not
+repeat the noise of the measurements already made.
+
+``--port auto`` finds the CS-2000 by its USB VID/PID (0x132B/0x2104); with
+none or several connected it stops with a list of the candidate ports.
+Remote mode is entered with ``RMTS,2`` (settings are not written to the
+instrument's flash memory, which spares it over long sessions); an instrument
+that answers ``RMTS,2`` with an error code is put in remote mode with
+``RMTS,1`` instead. An instrument error outside a patch's measurement (at
+``IDDR``, say) ends the run with a message giving the code, what it means
+and what to do.
 
 ``--display`` says where the patches are shown: ``simulated`` (the simulated
 headset; the default with ``--simulate``), ``window[:SCREEN]`` (a full-screen
@@ -40,9 +53,10 @@ import sys
 import threading
 from contextlib import ExitStack, contextmanager
 
+import numpy as np
 from tqdm import tqdm
 
-from instruments.cs2000 import CS2000, CS2000Error
+from instruments.cs2000 import CS2000Error, open_cs2000
 from instruments.headset import HEADSET_EFFECTS, HeadsetError, parse_effect
 from instruments.patch_display import (
     MirroredPatchDisplay,
@@ -78,7 +92,9 @@ def register(subparsers) -> None:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--simulate", action="store_true",
                         help="measure the simulated headset with the CS-2000 emulator (on a pty)")
-    source.add_argument("--port", metavar="DEVICE", help="serial port of the CS-2000 (e.g. /dev/ttyACM0)")
+    source.add_argument("--port", metavar="DEVICE|auto",
+                        help="serial port of the CS-2000 (e.g. /dev/ttyACM0), or auto: the one CS-2000 "
+                             "connected by USB")
     parser.add_argument("--effect", action="append", default=[], metavar="ID[:MAGNITUDE]",
                         help=f"with --simulate: a physical effect of the headset, repeatable; one of "
                              f"{', '.join(HEADSET_EFFECTS)}")
@@ -91,8 +107,8 @@ def register(subparsers) -> None:
     plans = parser.add_mutually_exclusive_group()
     plans.add_argument("--plan", choices=sorted(MEASUREMENT_PLANS), help="built-in plan (default paper)")
     plans.add_argument("--plan-file", metavar="FILE", help="CSV plan with columns kind,r,g,b")
-    parser.add_argument("--seed", type=int, help="seed of the validation colours and instrument noise "
-                                                 "(default: a fresh one, kept in the journal)")
+    parser.add_argument("--seed", type=int, help="seed of the validation colours and, with --simulate, the "
+                                                 "instrument noise (default: a fresh one, kept in the journal)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--resume", action="store_true",
                         help="continue the run journaled in DIR (failed patches are measured again)")
@@ -164,36 +180,47 @@ def _run(args) -> int:
         settings = journal.header.settings
         effects = settings.get("effects", effects) if args.simulate else effects
     run_plan = plan if journal is None else journal.header.plan
+    noise_seed, noise = _noise_seed(args, run_plan, journal) if args.simulate else (None, None)
 
     ctrl_c = _CtrlCCancels()
 
     def measure_on(window_display=None):
         """The measurement itself; in a worker thread when ``window_display`` (the patch window) is given."""
+        try:
+            return run_measurement(window_display)
+        except CS2000Error as error:
+            raise _instrument_error(error, _instrument_name(args)) from None
+
+    def run_measurement(window_display):
         run_settings = settings
         with ExitStack() as stack:
             simulation = None
             if args.simulate:
                 simulation = stack.enter_context(open_simulated_instrument(
                     effects,
-                    seed=run_plan.seed,
+                    seed=noise,
                     time_scale=args.time_scale,
                     clock_offset_s=0.0 if journal is None else journal.session_end_s(),
                     plan=run_plan,
                     session_length_s=run_settings.get("session_length_s"),
                 ))
                 run_settings = {**run_settings, "effects": effects, "time_scale": args.time_scale,
-                                "session_length_s": simulation.headset.session_length_s}
+                                "session_length_s": simulation.headset.session_length_s,
+                                "noise_seed": noise_seed}
             display = _open_display(stack, display_kind, display_address, simulation, window_display)
-            try:
-                meter = stack.enter_context(CS2000(simulation.server.port if simulation else args.port,
-                                                   timeout_s=_INSTRUMENT_TIMEOUT_S))
-            except CS2000Error as error:
-                raise WorkbenchError(f"cannot use the CS-2000 on {args.port or 'the emulator'}: {error}") from None
+            port = simulation.server.port if simulation else (None if args.port == "auto" else args.port)
+            # RMTS,2 spares the instrument's flash memory; firmware that answers it with an error
+            # code gets RMTS,1 (the driver falls back, and logs it).
+            meter = stack.enter_context(open_cs2000(port, timeout_s=_INSTRUMENT_TIMEOUT_S,
+                                                    no_flash_write="if-supported"))
             options = {"clock": (lambda header, journal: simulation.clock)} if simulation else {}
             if journal is None:
+                run_settings = {**run_settings, "remote_mode": meter.remote_mode}  # RMTS,2 or the fallback
                 run = MeasurementRun.start(args.out, run_plan, display, meter, settings=run_settings, **options)
             else:
-                run = MeasurementRun.resume_session(args.out, display, meter, plan=plan, **options)
+                details = {"noise_seed": [int(v) for v in noise.entropy]} if simulation else None
+                run = MeasurementRun.resume_session(args.out, display, meter, plan=plan, journal=journal,
+                                                    resume_details=details, **options)
             return _drive(run, ctrl_c)
 
     if display_kind == "window":
@@ -206,6 +233,39 @@ def _run(args) -> int:
         print(f"cancelled: run again with --resume --out {args.out} to continue", file=sys.stderr)
         return 130
     return 1 if summary.failed else 0
+
+
+def _noise_seed(args, run_plan, journal):
+    """The simulated instrument's noise seed: ``(session seed, what seeds the emulator)``.
+
+    A new session uses ``--seed``, else the plan's seed, else a fresh one (the
+    header's settings keep it). A resumed session takes its seed from the
+    journal (``--seed`` on resume only selects the plan, which must be the
+    journal's). The k-th resume of a session uses
+    ``SeedSequence([session seed, k])``, so that its noise does not repeat
+    what the earlier runs drew; its resume record keeps ``[session seed, k]``.
+    """
+    if journal is None:
+        seed = next((s for s in (args.seed, run_plan.seed) if s is not None), None)
+        seed = secrets.randbelow(2**31) if seed is None else int(seed)
+        return seed, seed
+    recorded = journal.header.settings.get("noise_seed", journal.header.plan.seed)
+    seed = secrets.randbelow(2**31) if recorded is None else int(recorded)
+    return seed, np.random.SeedSequence([seed, len(journal.resumes) + 1])
+
+
+def _instrument_name(args) -> str:
+    if args.simulate:
+        return "the emulated CS-2000"
+    if args.port == "auto":
+        return "the CS-2000 (--port auto)"
+    return f"the CS-2000 on {args.port}"
+
+
+def _instrument_error(error: CS2000Error, name: str) -> WorkbenchError:
+    """One message for an instrument error that ends the run: code, meaning, what to do."""
+    said = f" answered {error.code}" if error.code else ""
+    return WorkbenchError(f"{name}{said}: {error.meaning}. What to do: {error.advice}")
 
 
 def _check_resume_settings(journal, args, effects: dict) -> None:

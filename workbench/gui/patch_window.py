@@ -55,6 +55,12 @@ class PatchWindow(QWidget):
     ----------
     painted : Signal(list)
         Emitted after each paint with the ``[r, g, b]`` on screen.
+    paint_count : int
+        How many times the window has painted itself.
+    last_painted : list or None
+        The ``[r, g, b]`` of the latest paint (``None`` before the first);
+        unlike :attr:`rgb`, which :meth:`set_patch` sets before it paints,
+        this says what was actually painted.
     """
 
     painted = Signal(list)
@@ -73,6 +79,8 @@ class PatchWindow(QWidget):
             _LOG.warning("screen %s has a colour depth of %d bits: patches will be quantised; "
                          "set it to 24-bit colour before measuring", screen.name(), screen.depth())
         self._rgb = [0, 0, 0]
+        self.paint_count = 0
+        self.last_painted: list | None = None
 
     @property
     def rgb(self) -> list:
@@ -89,6 +97,8 @@ class PatchWindow(QWidget):
         painter = QPainter(self)
         painter.fillRect(self.rect(), QColor(*self._rgb))
         painter.end()
+        self.paint_count += 1
+        self.last_painted = list(self._rgb)
         self.painted.emit(list(self._rgb))
 
 

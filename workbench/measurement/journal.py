@@ -18,15 +18,23 @@ A journal is a text file of JSON lines (``journal.jsonl``):
         "nd_used": false, "spectrum": {"start_nm": 380, "step_nm": 1, "values": [...]}}
 
    or, for a patch that failed after the instrument's own recovery,
-   ``"status": "failed", "reason": "CS-2000 ER10: ..."`` and no values;
+   ``"status": "failed", "reason": "CS-2000 ER10: ..."`` and no values. An
+   ``ok`` record may carry a ``"warning"`` (e.g. the instrument could not
+   compute the spectrum, which is then left out, while its XYZ are kept);
 
-3. a **resume** record each time ``--resume`` picks the session up again.
+3. a **resume** record each time ``--resume`` picks the session up again
+   (with whatever the resuming run adds, e.g. a simulation's noise seed).
 
 Nothing is ever rewritten in place. A crash can leave a truncated last line;
 :func:`read_journal` ignores it (and reports that it did), and
 :meth:`JournalWriter.append_to` cuts it off before appending. ``index`` is the
 patch's position in the plan; a patch whose latest record is ``failed`` is
 measured again on resume, and its later record supersedes the earlier one.
+
+One writer at a time: :class:`JournalWriter` holds an exclusive ``flock`` on
+the journal for as long as it is open (POSIX), so a second ``measure`` run on
+the same directory stops with :class:`JournalBusyError` instead of measuring
+the pending patches a second time.
 
 Units as in :mod:`workbench`: XYZ and ``Lv`` absolute (cd/m²), spectral
 radiance in W·sr⁻¹·m⁻²·nm⁻¹, ``t_s`` seconds since the session began (the
@@ -37,6 +45,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import logging
 import os
 import time
 from dataclasses import dataclass, field
@@ -45,9 +54,14 @@ from pathlib import Path
 import numpy as np
 
 from workbench import __version__
-from workbench.errors import SpectrumFileError
+from workbench.errors import SpectrumFileError, WorkbenchError
 from workbench.measurement.plans import MeasurementPlan, Patch
 from workbench.session import Session
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows: no advisory lock, one writer is up to the user
+    fcntl = None
 
 __all__ = [
     "JOURNAL_FORMAT",
@@ -56,6 +70,7 @@ __all__ = [
     "JournalRecord",
     "Journal",
     "JournalWriter",
+    "JournalBusyError",
     "read_journal",
     "journal_to_session",
 ]
@@ -65,6 +80,12 @@ JOURNAL_FORMAT = "vr-workbench-journal/1"
 
 SOFTWARE = f"vr-colour-workbench {__version__}"
 """Software name and version written into every header and resume record."""
+
+_LOG = logging.getLogger(__name__)
+
+
+class JournalBusyError(WorkbenchError):
+    """Another process is writing the journal (or wrote to it while this one started)."""
 
 
 def _utc_iso(epoch_s: float) -> str:
@@ -166,6 +187,9 @@ class JournalRecord:
         Spectral radiance, W·sr⁻¹·m⁻²·nm⁻¹.
     reason : str
         Why the patch failed (empty when ok).
+    warning : str
+        What is missing from an ``ok`` record and why (empty when nothing is),
+        e.g. a spectrum the instrument could not compute.
     """
 
     index: int
@@ -182,6 +206,7 @@ class JournalRecord:
     wavelengths: np.ndarray | None = field(default=None, compare=False)
     spectrum: np.ndarray | None = field(default=None, compare=False)
     reason: str = ""
+    warning: str = ""
 
     @property
     def ok(self) -> bool:
@@ -215,6 +240,8 @@ class JournalRecord:
                     "step_nm": step,
                     "values": [float(f"{v:.7g}") for v in self.spectrum],
                 }
+            if self.warning:
+                data["warning"] = self.warning
         else:
             data["reason"] = self.reason
         return data
@@ -241,6 +268,7 @@ class JournalRecord:
             wavelengths=wavelengths,
             spectrum=values,
             reason=str(data.get("reason", "")),
+            warning=str(data.get("warning", "")),
         )
 
 
@@ -260,6 +288,10 @@ class Journal:
         Whether an incomplete last line (a crash mid-write) was ignored.
     complete_bytes : int
         Length of the file up to the end of its last complete line.
+    size_bytes : int or None
+        Length of the file when it was read (``None`` for a journal put
+        together in memory); :meth:`JournalWriter.append_to` refuses a file
+        that has changed since.
     """
 
     path: Path
@@ -268,6 +300,7 @@ class Journal:
     resumes: tuple = ()
     truncated: bool = False
     complete_bytes: int = 0
+    size_bytes: int | None = None
 
     def latest(self) -> dict:
         """The latest record of each plan index that has one: ``{index: JournalRecord}``."""
@@ -335,13 +368,16 @@ def read_journal(path: str | os.PathLike) -> Journal:
     if header is None:
         raise SpectrumFileError(path, 1, "no header record",
                                 "the run died before it started; delete the directory and start again")
-    return Journal(path, header, tuple(records), tuple(resumes), truncated, complete_bytes)
+    return Journal(path, header, tuple(records), tuple(resumes), truncated, complete_bytes, len(data))
 
 
 class JournalWriter:
     """Appends records to a journal, each flushed and fsynced before returning.
 
     Use :meth:`create` for a new session and :meth:`append_to` to resume one.
+    While it is open the writer holds an exclusive, non-blocking ``flock`` on
+    the journal (released by :meth:`close`, or by the process ending, however
+    it ends): a second writer is refused with :class:`JournalBusyError`.
     """
 
     def __init__(self, path: Path, handle):
@@ -350,30 +386,63 @@ class JournalWriter:
 
     @classmethod
     def create(cls, path: str | os.PathLike, header: JournalHeader) -> "JournalWriter":
-        """Start a new journal at ``path`` (which must not exist) with ``header``."""
+        """Start a new journal at ``path`` (which must not exist) with ``header``.
+
+        Raises
+        ------
+        JournalBusyError
+            If another run is writing the journal at ``path``.
+        SpectrumFileError
+            If a journal already exists there (``--resume`` continues it).
+        """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         try:
             handle = open(path, "xb")
         except FileExistsError:
+            if _is_locked(path):
+                raise _busy(path) from None
             raise SpectrumFileError(
                 path, None, "a journal already exists here",
                 "add --resume to continue that run, or choose another --out directory",
             ) from None
+        _lock(handle, path)
         writer = cls(path, handle)
         writer._write(header.to_json())
         _fsync_directory(path.parent)
         return writer
 
     @classmethod
-    def append_to(cls, journal: Journal) -> "JournalWriter":
-        """Continue ``journal``: cut off a truncated last line, then append a resume record."""
+    def append_to(cls, journal: Journal, resume_details: dict | None = None) -> "JournalWriter":
+        """Continue ``journal``: cut off a truncated last line, then append a resume record.
+
+        Parameters
+        ----------
+        journal : Journal
+            As :func:`read_journal` returned it; the file must not have changed since.
+        resume_details : dict, optional
+            More fields for the resume record (JSON-able), e.g. a simulation's noise seed.
+
+        Raises
+        ------
+        JournalBusyError
+            If another run is writing the journal, or wrote to it after it was read.
+        """
         handle = open(journal.path, "r+b")
+        _lock(handle, journal.path)
+        size = os.fstat(handle.fileno()).st_size
+        if journal.size_bytes is not None and size != journal.size_bytes:
+            handle.close()
+            raise JournalBusyError(
+                f"{journal.path} changed while this run was starting ({journal.size_bytes} bytes when "
+                f"read, {size} now): another measure run wrote to it; wait for it or stop it, then "
+                "run again with --resume"
+            )
         handle.truncate(journal.complete_bytes)
         handle.seek(journal.complete_bytes)
         writer = cls(journal.path, handle)
         writer._write({"record": "resume", "software": SOFTWARE, "time_utc": _utc_iso(time.time()),
-                       "measured_before": len(journal.records)})
+                       "measured_before": len(journal.records), **(resume_details or {})})
         return writer
 
     def _write(self, entry: dict) -> None:
@@ -382,11 +451,21 @@ class JournalWriter:
         self._handle.flush()
         os.fsync(self._handle.fileno())
 
-    def write_record(self, record: JournalRecord) -> None:
-        """Append one measurement record; on return it is on disk."""
-        self._write(record.to_json())
+    def write_record(self, record: JournalRecord) -> JournalRecord:
+        """Append one measurement record; on return it is on disk.
+
+        Returns
+        -------
+        JournalRecord
+            The record as the journal holds it (and :func:`read_journal` will
+            read it back): values rounded as written.
+        """
+        entry = record.to_json()
+        self._write(entry)
+        return JournalRecord.from_json(entry)
 
     def close(self) -> None:
+        """Close the file, which releases the lock."""
         if not self._handle.closed:
             self._handle.close()
 
@@ -395,6 +474,37 @@ class JournalWriter:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _busy(path: Path) -> JournalBusyError:
+    return JournalBusyError(f"another measure run is writing {path}; wait for it or stop it")
+
+
+def _lock(handle, path: Path) -> None:
+    """Take the writer's exclusive lock on ``handle`` without waiting (closes it if refused)."""
+    if fcntl is None:
+        return
+    try:
+        fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        handle.close()
+        raise _busy(path) from None
+    except OSError as error:  # e.g. a file system without flock: carry on, unguarded
+        _LOG.warning("%s: cannot lock the journal (%s); make sure no other run writes to it", path, error)
+
+
+def _is_locked(path: Path) -> bool:
+    """Whether a writer holds the lock on ``path`` now."""
+    if fcntl is None:
+        return False
+    try:
+        with open(path, "rb") as handle:
+            fcntl.flock(handle.fileno(), fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+    return False
 
 
 def _fsync_directory(directory: Path) -> None:
@@ -415,14 +525,21 @@ def journal_to_session(journal: Journal) -> Session:
     """The successful measurements of ``journal`` as a :class:`~workbench.session.Session`.
 
     Rows are in plan order; failed patches are left out. Spectra are included
-    when every successful record has one on the same wavelengths.
+    when every successful record has one on the same wavelengths (a session
+    CSV has no way to leave one row's spectrum blank); otherwise a warning
+    names the records without one.
     """
     records = journal.ok_records()
     if not records:
         raise SpectrumFileError(journal.path, None, "the journal holds no successful measurement",
                                 "run (or resume) the measurement first")
     spectra = wavelengths = None
-    if all(r.spectrum is not None for r in records):
+    without = [r.index for r in records if r.spectrum is None]
+    if without and len(without) < len(records):
+        _LOG.warning("%s: %d measurement(s) have no spectrum (journal index %s), so the session has no "
+                     "spectral columns; re-measure those patches to get them", journal.path, len(without),
+                     ", ".join(map(str, without[:10])) + (", ..." if len(without) > 10 else ""))
+    if not without:
         wavelengths = records[0].wavelengths
         if all(len(r.wavelengths) == len(wavelengths) and np.allclose(r.wavelengths, wavelengths) for r in records):
             spectra = np.array([r.spectrum for r in records])

@@ -26,10 +26,16 @@ Then:
 * at the end the session is exported as ``session.csv`` (with ``nm380`` …
   ``nm780`` spectral columns) and ``session.ti3``.
 
+A measurement whose spectrum the instrument could not compute (its "not
+computable" placeholders, NaN in the driver's result) keeps its XYZ, ``Lv`` and
+``xy`` but not the spectrum, and its journal record says so in ``warning``; if
+XYZ are not computable either, the patch fails with that reason.
+
 Times: ``t_s`` in the journal is the session clock's reading when the patch was
 shown (:class:`SessionClock`: wall-clock seconds since the session began for a
 real instrument; the modelled instrument time for a simulated one); progress
-ETAs are wall-clock seconds from :class:`~workbench.measurement.eta.PatchDurationModel`.
+ETAs are wall-clock seconds (the runner's ``wall_clock``, :func:`time.monotonic`
+by default) from :class:`~workbench.measurement.eta.PatchDurationModel`.
 """
 
 from __future__ import annotations
@@ -247,6 +253,19 @@ def _where(index: int, patch: Patch, total: int) -> str:
     return f"patch {index + 1} of {total} ({patch.describe()}, journal index {index})"
 
 
+def _nm_ranges(wavelengths) -> str:
+    """``"380-384, 779-780 nm"`` for a sorted list of whole wavelengths."""
+    values = [int(round(w)) for w in wavelengths]
+    ranges, start = [], None
+    for i, w in enumerate(values):
+        if start is None:
+            start = w
+        if i + 1 == len(values) or values[i + 1] != w + 1:
+            ranges.append(f"{start}" if start == w else f"{start}-{w}")
+            start = None
+    return ", ".join(ranges) + " nm"
+
+
 def _finite_or_none(values) -> list | None:
     values = [float(v) for v in np.ravel(values)]
     return values if all(math.isfinite(v) for v in values) else None
@@ -274,12 +293,16 @@ class MeasurementRun:
         Seconds to wait after the display confirms a patch before measuring.
     max_consecutive_failures : int
         Stop the run after this many failed patches in a row.
+    wall_clock : callable
+        Monotonic wall-clock seconds, for the time each patch takes (the ETA)
+        and the run's wall time; :func:`time.monotonic` by default.
     """
 
     def __init__(self, out_dir: Path, header: JournalHeader, journal: Journal | None, writer: JournalWriter,
                  display, meter: Meter, clock: SessionClock, *,
                  on_countdown: Callable[[float, float], None] | None = None,
-                 settle_s: float = 0.0, max_consecutive_failures: int = 3):
+                 settle_s: float = 0.0, max_consecutive_failures: int = 3,
+                 wall_clock: Callable[[], float] = time.monotonic):
         self.out_dir = Path(out_dir)
         self.header = header
         self.plan: MeasurementPlan = header.plan
@@ -289,7 +312,9 @@ class MeasurementRun:
         self.on_countdown = on_countdown
         self.settle_s = float(settle_s)
         self.max_consecutive_failures = int(max_consecutive_failures)
+        self.wall_clock = wall_clock
         self._writer = writer
+        self._records: list = [] if journal is None else list(journal.records)
         self._latest: dict = {} if journal is None else journal.latest()
         self._resumed = journal is not None
         self._cancel = threading.Event()
@@ -321,7 +346,7 @@ class MeasurementRun:
             ``clock(header, journal)`` returns the session clock; a
             :class:`WallSessionClock` from the header's start by default.
         **options
-            ``on_countdown``, ``settle_s``, ``max_consecutive_failures``.
+            ``on_countdown``, ``settle_s``, ``max_consecutive_failures``, ``wall_clock``.
         """
         out_dir = Path(out_dir)
         header = JournalHeader(plan=plan, instrument=_identity(meter),
@@ -333,8 +358,9 @@ class MeasurementRun:
 
     @classmethod
     def resume_session(cls, out_dir, display, meter: Meter, *, plan: MeasurementPlan | None = None,
-               clock: Callable[[JournalHeader, Journal | None], SessionClock] | None = None,
-               **options) -> "MeasurementRun":
+                       journal: Journal | None = None, resume_details: dict | None = None,
+                       clock: Callable[[JournalHeader, Journal | None], SessionClock] | None = None,
+                       **options) -> "MeasurementRun":
         """Continue the session journaled in ``out_dir``.
 
         Parameters
@@ -342,14 +368,27 @@ class MeasurementRun:
         plan : MeasurementPlan, optional
             If given, it must equal the journal's plan (same patches in the
             same order): a resumed run never changes what is measured.
+        journal : Journal, optional
+            ``out_dir``'s journal if the caller has read it already (it is read
+            here otherwise); the file must not have changed since.
+        resume_details : dict, optional
+            More fields for the journal's resume record (e.g. the noise seed of
+            a simulated instrument).
+        clock : callable, optional
+            As for :meth:`start`.
+        **options
+            As for :meth:`start`.
 
         Raises
         ------
         InputError
             If ``plan`` differs from the journal's, or the instrument is another one.
+        JournalBusyError
+            If another run is writing the journal.
         """
         out_dir = Path(out_dir)
-        journal = read_journal(out_dir / JOURNAL_NAME)
+        if journal is None:
+            journal = read_journal(out_dir / JOURNAL_NAME)
         if journal.truncated:
             _LOG.warning("%s: ignoring an incomplete last line (the run died while writing it)", journal.path)
         header = journal.header
@@ -365,7 +404,7 @@ class MeasurementRun:
                 f"{journal.path} was measured with instrument serial {header.instrument.get('serial')!r}, "
                 f"this one is {identity.get('serial')!r}; resume with the same instrument, or start a new run"
             )
-        writer = JournalWriter.append_to(journal)
+        writer = JournalWriter.append_to(journal, resume_details)
         make_clock = clock or (lambda h, j: WallSessionClock(h.started_epoch_s))
         return cls(out_dir, header, journal, writer, display, meter, make_clock(header, journal), **options)
 
@@ -400,6 +439,10 @@ class MeasurementRun:
     def _eta(self, pending: list) -> float | None:
         return self.durations.remaining_s([self.plan.patches[i] for i in pending])
 
+    def journal_so_far(self) -> Journal:
+        """The journal's header and measurement records so far (earlier runs' and this run's), from memory."""
+        return Journal(self._writer.path, self.header, tuple(self._records))
+
     def events(self) -> Iterator:
         """Perform the run, yielding one event per step; the last is :class:`RunFinished`.
 
@@ -410,7 +453,7 @@ class MeasurementRun:
             patches failed in a row; the message names the patch and says to
             resume. The journal is closed intact.
         """
-        started = time.monotonic()
+        started = self.wall_clock()
         total = len(self.plan)
         pending = self.pending_indices()
         try:
@@ -434,7 +477,8 @@ class MeasurementRun:
                     status = "cancelled"
                     break
                 record, wall_s = measured
-                self._writer.write_record(record)
+                record = self._writer.write_record(record)
+                self._records.append(record)
                 self._latest[index] = record
                 self.durations.observe(patch, record.Lv, wall_s)
                 consecutive_failures = 0 if record.ok else consecutive_failures + 1
@@ -450,9 +494,9 @@ class MeasurementRun:
             outputs = (self._writer.path,)
             if status == "finished":
                 outputs += self.export()
-            failed = tuple(r for _, r in sorted(self._latest.items()) if not r.ok)
+            failed = tuple(self.journal_so_far().failed_records())
             summary = RunSummary(status, total, self._done(), failed, self.clock.now(),
-                                 time.monotonic() - started, outputs)
+                                 self.wall_clock() - started, outputs)
             yield RunFinished(summary)
         finally:
             self._writer.close()
@@ -463,7 +507,7 @@ class MeasurementRun:
         where = _where(index, patch, len(self.plan))
         resume_hint = (f"The journal in {self.out_dir} keeps every measurement before it; "
                        "fix the cause and run the same command with --resume")
-        wall_start = time.monotonic()
+        wall_start = self.wall_clock()
         t_s = self.clock.now()
         try:
             self.display.show(list(patch.rgb))
@@ -485,9 +529,22 @@ class MeasurementRun:
             raise RunAborted(f"the connection to the instrument failed while measuring {where}: {error}. "
                              f"{resume_hint}", index, patch) from error
         XYZ = _finite_or_none(measurement.XYZ)
+        wavelengths = np.asarray(measurement.wavelengths, dtype=float)
+        spectrum = np.asarray(measurement.radiance, dtype=float)
+        not_computable = ~np.isfinite(spectrum)
+        spectrum_problem = (
+            f"the instrument could not compute the spectral radiance at {int(not_computable.sum())} of "
+            f"{spectrum.size} wavelengths ({_nm_ranges(wavelengths[not_computable])})"
+            if not_computable.any() else ""
+        )
         if XYZ is None:
+            reason = f"the instrument could not compute XYZ (sent {list(measurement.XYZ)})"
             return self._failed(index, patch, t_s, wall_start,
-                                f"the instrument could not compute XYZ (sent {list(measurement.XYZ)})")
+                                f"{reason}, and {spectrum_problem}" if spectrum_problem else reason)
+        warning = ""
+        if spectrum_problem:
+            warning = f"{spectrum_problem}; the spectrum is left out, XYZ, Lv and xy are the instrument's"
+            _LOG.warning("%s: %s", where, warning)
         xy = _finite_or_none(measurement.xy)
         record = JournalRecord(
             index=index, kind=patch.kind, rgb=patch.rgb, status="ok", t_s=t_s,
@@ -496,19 +553,24 @@ class MeasurementRun:
             xy=None if xy is None else tuple(xy),
             integration_s=None if measurement.integration_s is None else float(measurement.integration_s),
             nd_used=None if measurement.nd_used is None else bool(measurement.nd_used),
-            wavelengths=np.asarray(measurement.wavelengths, dtype=float),
-            spectrum=np.asarray(measurement.radiance, dtype=float),
+            wavelengths=None if warning else wavelengths,
+            spectrum=None if warning else spectrum,
+            warning=warning,
         )
-        return record, time.monotonic() - wall_start
+        return record, self.wall_clock() - wall_start
 
     def _failed(self, index: int, patch: Patch, t_s: float, wall_start: float, reason: str):
         record = JournalRecord(index=index, kind=patch.kind, rgb=patch.rgb, status="failed", t_s=t_s,
                                duration_s=self.clock.now() - t_s, reason=reason)
-        return record, time.monotonic() - wall_start
+        return record, self.wall_clock() - wall_start
 
     def export(self) -> tuple:
-        """Write ``session.csv`` and ``session.ti3`` from the journal; returns their paths."""
-        journal = read_journal(self.out_dir / JOURNAL_NAME)
+        """Write ``session.csv`` and ``session.ti3`` from the journal; returns their paths.
+
+        The journal is taken from memory (:meth:`journal_so_far`), which holds
+        each record as written, so the exports equal what the file would give.
+        """
+        journal = self.journal_so_far()
         session = journal_to_session(journal)
         instrument = " ".join(str(journal.header.instrument.get(k, "")) for k in ("model", "serial")).strip()
         csv_path = write_session_csv(session, self.out_dir / SESSION_CSV_NAME)

@@ -11,10 +11,10 @@ the emulator's ``time_scale`` (which only sets how long the pty makes the
 host wait): each time the emulator starts a measurement, the
 :class:`ModelledSessionClock` advances by the pre-measurement plus the
 measurement time that the emulator's timing model gives for the radiance being
-measured (:class:`InstrumentTimingModel`, which drives a second, silent
-emulator in virtual time through its public ``feed``/``poll`` interface). The
-headset's warm-up and the journal's ``t_s`` both read that clock, so a run at
-``--time-scale 0`` produces the same session timeline as one at real timing.
+measured (:class:`InstrumentTimingModel`, which asks the emulator's pure
+:func:`~instruments.cs2000.measurement_timing`). The headset's warm-up and the
+journal's ``t_s`` both read that clock, so a run at ``--time-scale 0``
+produces the same session timeline as one at real timing.
 """
 
 from __future__ import annotations
@@ -24,7 +24,9 @@ from typing import Sequence
 
 import numpy as np
 
-from instruments.cs2000 import CS2000Emulator, serve_on_pty
+from instruments.cs2000 import CS2000Emulator, measurement_timing, radiance_to_luminance, serve_on_pty
+from instruments.cs2000.emulator import LUMINANCE_RANGE_CD_M2
+from instruments.cs2000.protocol import WAVELENGTHS_NM
 from instruments.headset import SimulatedHeadset
 from workbench.measurement.plans import MeasurementPlan
 
@@ -40,10 +42,10 @@ __all__ = [
 class InstrumentTimingModel:
     """Seconds a CS-2000 takes to measure a radiance, from the emulator's timing model.
 
-    A private, noiseless emulator at ``time_scale=1`` is driven in virtual time:
-    ``MEAS,1`` at t = 0, then :meth:`~instruments.cs2000.CS2000Emulator.poll` at
-    each :meth:`~instruments.cs2000.CS2000Emulator.next_event_time` until the
-    measurement has ended. Nothing waits.
+    The emulator's own pure functions give the luminance it sees
+    (:func:`~instruments.cs2000.radiance_to_luminance`) and its timing
+    (:func:`~instruments.cs2000.measurement_timing`) in normal speed mode with
+    the internal ND filter on auto, the emulator's defaults. Nothing waits.
 
     Parameters
     ----------
@@ -52,22 +54,30 @@ class InstrumentTimingModel:
     """
 
     def __init__(self, angle: int = 0):
-        self._radiance = None
-        self._emulator = CS2000Emulator(lambda: self._radiance, time_scale=1.0, seed=0, angle=angle,
-                                        relative_noise=0.0, noise_floor=0.0)
-        self._emulator.feed(b"RMTS,1\r\n", 0.0)
+        if angle not in LUMINANCE_RANGE_CD_M2:
+            raise ValueError(f"angle must be 0 (1°), 1 (0.2°) or 2 (0.1°), got {angle!r}")
+        self.angle = angle
 
     def measurement_s(self, radiance: np.ndarray) -> float:
-        """Pre-measurement plus measurement time (s) at real timing for ``radiance`` (401,)."""
-        self._radiance = np.asarray(radiance, dtype=float)
-        now = 0.0
-        reply = self._emulator.feed(b"MEAS,1\r\n", now)
-        while (due := self._emulator.next_event_time()) is not None:
-            now = due
-            reply += self._emulator.poll(now)
-        if not reply.startswith(b"OK00,"):
-            raise ValueError(f"the emulator refused the radiance ({reply!r}); it is outside the instrument's range")
-        return now
+        """Pre-measurement plus measurement time (s) at real timing for ``radiance`` (401,).
+
+        Raises
+        ------
+        ValueError
+            If the emulator would refuse the radiance: not 401 finite values
+            (ER99), or brighter than the instrument's range even with the
+            internal ND filter (ER10).
+        """
+        radiance = np.asarray(radiance, dtype=float)
+        if radiance.shape != (len(WAVELENGTHS_NM),) or not np.all(np.isfinite(radiance)):
+            raise ValueError(f"the radiance must be {len(WAVELENGTHS_NM)} finite values (380..780 nm), "
+                             f"got shape {radiance.shape}")
+        luminance = radiance_to_luminance(radiance)
+        maximum = LUMINANCE_RANGE_CD_M2[self.angle][1]
+        if luminance > maximum:
+            raise ValueError(f"the emulator refuses {luminance:.4g} cd/m² (ER10): it is outside the "
+                             f"instrument's range (at most {maximum:g} cd/m² with the internal ND filter)")
+        return measurement_timing(luminance, angle=self.angle).duration_s
 
 
 class ModelledSessionClock:
