@@ -3,13 +3,13 @@ import pytest
 
 from workbench.errors import InputError
 from workbench.ishihara.observers import parse_observer
+from colour import XYZ_to_xyY, xyY_to_XYZ
+
 from workbench.ishihara.palette import (
     D65_reflectance_XYZ,
     XYZ_to_reflectance,
-    XYZ_to_xyY,
     design_palette,
     paper_dot_colours,
-    xyY_to_XYZ,
 )
 from workbench.ishihara.cones import confusion_line_residual
 from workbench.ishihara.paper import PAPER_TABLE5

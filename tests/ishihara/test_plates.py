@@ -9,6 +9,7 @@ from workbench.ishihara.plates import (
     PlateSpec,
     generate_plate,
     load_plate,
+    paper_coloured_plate,
     paper_plate_set_specs,
     save_plate,
     write_plate_preview,
@@ -113,3 +114,44 @@ def test_bad_plate_files_name_the_file_and_the_problem(tmp_path, paper_plates):
         load_plate(bad)
     with pytest.raises(InputError, match=".npz"):
         save_plate(plate, tmp_path / "plate.png")
+
+
+def test_truncated_or_corrupted_plate_file_names_the_file(tmp_path, paper_plates):
+    path = save_plate(paper_plates[0], tmp_path / "good.npz")
+    raw = path.read_bytes()
+    for fraction in (0.1, 0.5, 0.99):
+        cut = tmp_path / f"cut_{fraction}.npz"
+        cut.write_bytes(raw[:int(len(raw) * fraction)])
+        with pytest.raises(SpectrumFileError, match=f"cut_{fraction}.npz.*truncated or corrupted"):
+            load_plate(cut)
+    corrupted = bytearray(raw)
+    middle = len(corrupted) // 2
+    corrupted[middle:middle + 64] = bytes(64)
+    bad = tmp_path / "corrupted.npz"
+    bad.write_bytes(bytes(corrupted))
+    with pytest.raises(SpectrumFileError, match="corrupted.npz"):
+        load_plate(bad)
+
+
+def test_plate_file_missing_an_array_names_it(tmp_path, paper_plates):
+    path = save_plate(paper_plates[0], tmp_path / "p.npz")
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files if k != "dot_radii"}
+    partial = tmp_path / "partial.npz"
+    np.savez(partial, **arrays)
+    with pytest.raises(SpectrumFileError, match=r"partial.npz.*dot_radii"):
+        load_plate(partial)
+
+
+def test_paper_coloured_plate_keeps_the_layout_and_uses_the_ten_paper_colours(paper_plates):
+    plate = paper_coloured_plate(paper_plates[2])
+    assert plate.layout is paper_plates[2].layout and plate.spec == paper_plates[2].spec
+    assert set(plate.colour_names) == {f"P{i}" for i in range(1, 11)}
+    assert np.all(plate.dot_lightness == 1.0)
+    # darker designed dots of a family get the darker paper colour
+    designed = paper_plates[2]
+    greens = [i for i, c in enumerate(designed.dot_colours) if c.startswith("green")]
+    order = sorted(greens, key=lambda i: designed.dot_lightness[i])
+    assert plate.dot_colours[order[0]] == "P1" and plate.dot_colours[order[-1]] == "P3"
+    with pytest.raises(InputError, match="red-"):
+        paper_coloured_plate(paper_plates[9])  # the classification plate's reds have no family

@@ -1,16 +1,19 @@
 """The virtual Ishihara test: hyperspectral plates and simulated observers (no Qt).
 
-- :mod:`.cones` — Smith & Pokorny cone fundamentals, copunctal points.
+- :mod:`.cones` — Smith & Pokorny (CIE 1931) and Stockman & Sharpe (2000)
+  cone fundamentals, photopigment shifts, copunctal points.
 - :mod:`.palette` — dot reflectances designed on protan/deutan confusion lines,
   starting from the paper's Table 5 colours (spectral upsampling, Otsu 2018).
 - :mod:`.glyphs`, :mod:`.packing`, :mod:`.plates` — digit font, packed dots,
   the plate types and the paper's 10-plate set; ``.npz`` files and previews.
-- :mod:`.observers` — normal, anomalous (Machado et al. 2009) and dichromatic
-  observers in a receptor-noise colour space.
+- :mod:`.observers` — normal, anomalous and dichromatic observers in a
+  receptor-noise colour space, on either set of fundamentals (Machado et al.
+  2009's blend on CIE 1931; a real pigment shift on Stockman & Sharpe).
 - :mod:`.reading`, :mod:`.scoring`, :mod:`.examination` — reading a plate,
   Ishihara's rules, taking the test.
-- :mod:`.hmd`, :mod:`.viewing` — the simulated HMD calibrated through the
-  CS-2000 emulator; the real plate vs the HMD at levels 1 and 2.
+- :mod:`.hmd`, :mod:`.viewing` — the simulated HMD (realistic: black and
+  channel interaction) calibrated through the CS-2000 emulator and diagnosed;
+  the real plate vs the HMD at levels 1 and 2.
 - :mod:`.experiment` — the paper's Tables 5 and 6.
 
 A tiny example::
@@ -21,12 +24,15 @@ A tiny example::
 """
 
 from workbench.ishihara.cones import (
+    cone_fundamental_shifted_StockmanSharpe2000,
     cone_fundamentals_Smith_Pokorny1975,
+    cone_fundamentals_StockmanSharpe2000,
     confusion_line_residual,
     copunctal_point,
 )
 from workbench.ishihara.examination import Examination, read_plate, take_test
 from workbench.ishihara.experiment import (
+    TABLE5_PLATE,
     TABLE6_CONDITIONS,
     TABLE6_OBSERVERS,
     ConditionFinding,
@@ -37,9 +43,15 @@ from workbench.ishihara.experiment import (
     table5,
     table6,
 )
-from workbench.ishihara.hmd import CalibratedHeadset, HeadsetRig, calibrated_headset
+from workbench.ishihara.hmd import (
+    REALISTIC_HEADSET_EFFECTS,
+    CalibratedHeadset,
+    HeadsetRig,
+    calibrated_headset,
+)
 from workbench.ishihara.observers import (
     OBSERVER_DEFICIENCIES,
+    OBSERVER_FUNDAMENTALS,
     Observer,
     parse_observer,
     simulated_observer,
@@ -62,6 +74,7 @@ from workbench.ishihara.plates import (
     generate_plate,
     generate_plate_set,
     load_plate,
+    paper_coloured_plate,
     paper_plate_set_specs,
     save_plate,
     write_plate_preview,
@@ -73,6 +86,8 @@ from workbench.ishihara.viewing import VIEWING_PATHS, Viewing, dot_radiance
 __all__ = [
     # cones
     "cone_fundamentals_Smith_Pokorny1975",
+    "cone_fundamentals_StockmanSharpe2000",
+    "cone_fundamental_shifted_StockmanSharpe2000",
     "copunctal_point",
     "confusion_line_residual",
     # palette
@@ -91,11 +106,13 @@ __all__ = [
     "generate_plate",
     "generate_plate_set",
     "paper_plate_set_specs",
+    "paper_coloured_plate",
     "save_plate",
     "load_plate",
     "write_plate_preview",
     # observers and reading
     "OBSERVER_DEFICIENCIES",
+    "OBSERVER_FUNDAMENTALS",
     "Observer",
     "simulated_observer",
     "parse_observer",
@@ -110,6 +127,7 @@ __all__ = [
     "VIEWING_PATHS",
     "Viewing",
     "dot_radiance",
+    "REALISTIC_HEADSET_EFFECTS",
     "CalibratedHeadset",
     "HeadsetRig",
     "calibrated_headset",
@@ -117,6 +135,7 @@ __all__ = [
     "PAPER_TABLE5",
     "PAPER_TABLE6_REFERENCE",
     "PAPER_TABLE6_OBSERVERS",
+    "TABLE5_PLATE",
     "TABLE6_CONDITIONS",
     "TABLE6_OBSERVERS",
     "Table5",

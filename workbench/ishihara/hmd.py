@@ -7,12 +7,23 @@ served on a pseudo-terminal (:func:`~instruments.cs2000.serve_on_pty`), and the
 real :class:`~instruments.cs2000.CS2000` driver talking to it. Its
 :meth:`HeadsetRig.calibrate` measures a calibration plan (the paper's by
 default: black, white, channel sweeps in steps of 5, validation colours) and
-fits the paper's display model to it; :meth:`HeadsetRig.measure` measures any
-DAC triplet end to end.
+diagnoses it (:func:`workbench.diagnostics.diagnose`): the paper's
+gamma-matrix model is the *baseline*, and the model extended with what the
+diagnosis found is the one the workbench uses (:attr:`CalibratedHeadset.display`).
+:meth:`HeadsetRig.measure` measures any DAC triplet end to end.
 
-:func:`calibrated_headset` runs that calibration once per seed and keeps the
-result (headset + fitted display model) for the simulated observers, which
-look at the headset's spectral radiance directly.
+The headset is realistic by default (:data:`REALISTIC_HEADSET_EFFECTS`): it
+emits Table 1's black and loses a little light to OLED power limiting, so the
+baseline model is wrong in the ways a real HMD makes it wrong, and the
+diagnosis has something to find. A clean headset (no effects) is exactly the
+baseline model, and any figure measured on it is only instrument noise and
+quantisation.
+
+:func:`calibrated_headset` runs that calibration once per process for each
+(seed, plan, effects) and keeps the result (headset + models + diagnosis) for
+Table 5, which measures the same headset again through a fresh rig, and for
+the simulated observers, which look at the headset's spectral radiance
+directly.
 
 Scale: DAC values 0..255; XYZ absolute (cd/m²), as the CS-2000 reports them.
 """
@@ -26,12 +37,14 @@ import numpy as np
 
 from instruments.cs2000 import CS2000, CS2000Emulator, serve_on_pty
 from instruments.headset import SimulatedHeadset
-from workbench.display import DisplayModel, fit_display_model
+from workbench.diagnostics import Diagnosis, diagnose
+from workbench.display import DisplayModel
 from workbench.measurement.plans import measurement_plan
 from workbench.session import Session
 
 __all__ = [
     "DEFAULT_HEADSET_SEED",
+    "REALISTIC_HEADSET_EFFECTS",
     "CalibratedHeadset",
     "HeadsetRig",
     "calibrated_headset",
@@ -40,26 +53,49 @@ __all__ = [
 DEFAULT_HEADSET_SEED = 5658
 """Seed of the simulated headset unit and of the instrument noise (the paper's article number)."""
 
+REALISTIC_HEADSET_EFFECTS = (("black-offset", 0.004), ("channel-interaction", 0.05))
+"""Effects of the default rig, ``(effect id, magnitude)`` pairs.
+
+``black-offset`` 0.004: the black of the paper's Table 1 (0.4 % of white, the
+simulator's default); ``channel-interaction`` 0.05: full white 5 % short of
+R + G + B (OLED power limiting, the low end of the realistic 5–15 %).
+"""
+
 
 @dataclass(frozen=True, eq=False)
 class CalibratedHeadset:
-    """A simulated headset and the display model fitted to its measured calibration.
+    """A simulated headset, its measured calibration and the display models fitted to it.
 
     Attributes
     ----------
     headset : SimulatedHeadset
         Emits spectral radiance for DAC values (``headset.radiance(rgb)``).
     display : DisplayModel
-        Fitted to :attr:`session` (the paper's gamma-matrix model).
+        The model the workbench uses: :attr:`diagnosis`'s extended model (the
+        baseline itself when nothing was found).
+    baseline : DisplayModel
+        The paper's gamma-matrix model (Eq. 1–2), fitted to the same session.
+    diagnosis : Diagnosis
+        What :func:`workbench.diagnostics.diagnose` found in :attr:`session`.
     session : Session
         The calibration as the CS-2000 measured it.
     seed : int
+    plan : str
+        The calibration plan measured.
     """
 
     headset: SimulatedHeadset
     display: DisplayModel
+    baseline: DisplayModel
+    diagnosis: Diagnosis
     session: Session
     seed: int
+    plan: str = "paper"
+
+    @property
+    def findings(self) -> tuple:
+        """Effect ids the diagnosis found, most important first."""
+        return tuple(r.effect for r in self.diagnosis.findings)
 
     def radiance(self, rgb_dac) -> np.ndarray:
         """Spectral radiance ``(…, 401)`` the headset emits for DAC values ``(…, 3)``."""
@@ -74,18 +110,30 @@ class HeadsetRig:
     ----------
     seed : int
         Seeds the headset unit (drawn from Table 1's spread) and the instrument noise.
-    effects : dict, optional
-        Headset effects (:data:`instruments.headset.HEADSET_EFFECTS`); none by default.
+    effects : dict or sequence of (str, float), optional
+        Headset effects (:data:`instruments.headset.HEADSET_EFFECTS`); none by
+        default (a clean headset: :data:`REALISTIC_HEADSET_EFFECTS` is what
+        :func:`calibrated_headset` uses).
     white_luminance : float
         Headset white, cd/m².
+    headset : SimulatedHeadset, optional
+        Measure this headset (e.g. a calibrated one again) instead of building
+        one from ``seed``, ``effects`` and ``white_luminance``.
+    noise_seed : int, optional
+        Seed of the instrument noise (default ``seed``).
     """
 
-    def __init__(self, seed: int = DEFAULT_HEADSET_SEED, effects: dict | None = None,
-                 white_luminance: float = 100.0):
+    def __init__(self, seed: int = DEFAULT_HEADSET_SEED, effects=None,
+                 white_luminance: float = 100.0, *, headset: SimulatedHeadset | None = None,
+                 noise_seed: int | None = None):
         self.seed = int(seed)
-        self.headset = SimulatedHeadset(effects, seed=self.seed, white_luminance=white_luminance)
+        if headset is None:
+            headset = SimulatedHeadset(dict(effects or {}), seed=self.seed,
+                                       white_luminance=white_luminance)
+        self.headset = headset
         self._emulator = CS2000Emulator(radiance_source=self.headset.current_radiance,
-                                        time_scale=0, seed=self.seed)
+                                        time_scale=0,
+                                        seed=self.seed if noise_seed is None else int(noise_seed))
         self._server = None
         self._meter = None
 
@@ -116,7 +164,11 @@ class HeadsetRig:
         return self._meter.measure()
 
     def calibrate(self, plan: str = "paper") -> CalibratedHeadset:
-        """Measure calibration ``plan`` (``"paper"`` or ``"quick"``) and fit the paper's model."""
+        """Measure calibration ``plan`` (``"paper"`` or ``"quick"``) and diagnose it.
+
+        Returns the headset with the paper's model (baseline) and the model
+        extended with the effects the diagnosis found (:attr:`CalibratedHeadset.display`).
+        """
         patches = measurement_plan(plan, self.seed).patches
         measurements = [self.measure(p.rgb) for p in patches]
         session = Session(kind=[p.kind for p in patches], rgb=[p.rgb for p in patches],
@@ -125,12 +177,35 @@ class HeadsetRig:
                           spectra=[m.radiance for m in measurements],
                           source=f"{self.headset.describe()}, measured by the CS-2000 emulator "
                                  f"({plan} plan)")
-        return CalibratedHeadset(self.headset, fit_display_model(session, "gamma-matrix"),
-                                 session, self.seed)
+        diagnosis = diagnose(session)
+        return CalibratedHeadset(headset=self.headset, display=diagnosis.extended,
+                                 baseline=diagnosis.baseline, diagnosis=diagnosis,
+                                 session=session, seed=self.seed, plan=plan)
+
+
+def _effects_key(effects) -> tuple:
+    pairs = effects.items() if isinstance(effects, dict) else (effects or ())
+    return tuple(sorted((str(k), float(v)) for k, v in pairs))
 
 
 @lru_cache(maxsize=4)
-def calibrated_headset(seed: int = DEFAULT_HEADSET_SEED, plan: str = "paper") -> CalibratedHeadset:
-    """The simulated headset with its display model fitted to a measured calibration (cached)."""
-    with HeadsetRig(seed) as rig:
+def _calibrated(seed: int, plan: str, effects: tuple) -> CalibratedHeadset:
+    with HeadsetRig(seed, dict(effects)) as rig:
         return rig.calibrate(plan)
+
+
+def calibrated_headset(seed: int = DEFAULT_HEADSET_SEED, plan: str = "paper",
+                       effects=REALISTIC_HEADSET_EFFECTS) -> CalibratedHeadset:
+    """The simulated headset calibrated through the CS-2000 emulator and diagnosed (cached).
+
+    Parameters
+    ----------
+    seed : int
+        Headset unit and instrument noise.
+    plan : str
+        Calibration plan (``"paper"``: 214 patches, ~1.5 s with the emulator at no wait).
+    effects : dict or sequence of (str, float)
+        Headset effects; default :data:`REALISTIC_HEADSET_EFFECTS`, ``()`` for
+        a clean headset.
+    """
+    return _calibrated(int(seed), str(plan), _effects_key(effects))

@@ -83,8 +83,6 @@ __all__ = [
     "PaletteColour",
     "Palette",
     "XYZ_to_reflectance",
-    "xyY_to_XYZ",
-    "XYZ_to_xyY",
     "D65_reflectance_XYZ",
     "project_on_confusion_line",
     "paper_dot_colours",
@@ -107,20 +105,6 @@ def _d65_weights() -> np.ndarray:
 def D65_reflectance_XYZ(reflectances) -> np.ndarray:
     """CIE 1931 XYZ ``(…, 3)`` of reflectances ``(…, 401)`` under D65 (perfect diffuser Y = 1)."""
     return np.asarray(reflectances, dtype=float) @ _d65_weights()
-
-
-def xyY_to_XYZ(xyY) -> np.ndarray:
-    """CIE XYZ from xyY ``(…, 3)`` (same scale for Y)."""
-    xyY = np.asarray(xyY, dtype=float)
-    x, y, Y = xyY[..., 0], xyY[..., 1], xyY[..., 2]
-    return np.stack([x / y * Y, Y, (1 - x - y) / y * Y], axis=-1)
-
-
-def XYZ_to_xyY(XYZ) -> np.ndarray:
-    """CIE xyY from XYZ ``(…, 3)`` (same scale for Y)."""
-    XYZ = np.asarray(XYZ, dtype=float)
-    total = XYZ.sum(axis=-1)
-    return np.stack([XYZ[..., 0] / total, XYZ[..., 1] / total, XYZ[..., 1]], axis=-1)
 
 
 def _upsample_Otsu2018(XYZ: np.ndarray) -> np.ndarray:
@@ -193,7 +177,10 @@ def XYZ_to_reflectance(XYZ, method: str = "Otsu 2018") -> np.ndarray:
         free = ~(((reflectance <= 0.0) & (step < 0)) | ((reflectance >= 1.0) & (step > 0)))
         if not np.all(free):
             step = np.zeros_like(reflectance)
-            step[free] = _fundamental_metamer_step(weights[free], residual)
+            try:
+                step[free] = _fundamental_metamer_step(weights[free], residual)
+            except np.linalg.LinAlgError:  # the free bands no longer span XYZ: out of reach
+                break
         reflectance = np.clip(reflectance + step, 0.0, 1.0)
     raise InputError(f"no reflectance on [0, 1] has D65 XYZ {np.round(XYZ, 5).tolist()} "
                      f"(residual {np.abs(residual).max():.2g}); the colour lies outside the "
@@ -275,7 +262,7 @@ class Palette:
 
 def _paper_XYZ(dot) -> np.ndarray:
     x, y, Y = dot.calculated_xyY
-    return xyY_to_XYZ([x, y, Y / 100.0])
+    return colour.xyY_to_XYZ([x, y, Y / 100.0])
 
 
 @lru_cache(maxsize=4)
@@ -307,7 +294,7 @@ def _family_statistics():
 
 
 def _xyY(XYZ) -> np.ndarray:
-    return XYZ_to_xyY(np.asarray(XYZ, dtype=float))
+    return colour.XYZ_to_xyY(np.asarray(XYZ, dtype=float))
 
 
 def _with_luminance(XYZ, Y: float) -> np.ndarray:
@@ -373,9 +360,9 @@ def design_palette(method: str = "Otsu 2018") -> Palette:
     means, lightest, lightness_range = _family_statistics()
     protan, deutan = "protan", "deutan"
 
-    ochre = xyY_to_XYZ([*means["ochre"], lightest["ochre"]])
+    ochre = colour.xyY_to_XYZ([*means["ochre"], lightest["ochre"]])
     green = {
-        deficiency: xyY_to_XYZ([*project_on_confusion_line(means["green"], _xyY(ochre)[:2],
+        deficiency: colour.xyY_to_XYZ([*project_on_confusion_line(means["green"], _xyY(ochre)[:2],
                                                            deficiency), lightest["green"]])
         for deficiency in (protan, deutan)
     }
@@ -388,7 +375,7 @@ def design_palette(method: str = "Otsu 2018") -> Palette:
     purple = s_shifted(ochre, lightest["purple"])
     blue_green = {d: s_shifted(green[d], lightest["bluish-green"]) for d in (protan, deutan)}
 
-    ground = xyY_to_XYZ([*means["bluish-green"], lightest["bluish-green"]])
+    ground = colour.xyY_to_XYZ([*means["bluish-green"], lightest["bluish-green"]])
     target = CLASSIFICATION_MARGIN * LEGIBILITY_THRESHOLD_JND
     red_protan = _displace_until_seen(ground, 0, +1.0, deutan, target, method)
     red_deutan = _displace_until_seen(ground, 1, -1.0, protan, target, method)

@@ -45,6 +45,8 @@ answers, :mod:`workbench.ishihara.paper`).
 from __future__ import annotations
 
 import json
+import zipfile
+import zlib
 from dataclasses import asdict, dataclass
 from functools import cached_property, lru_cache
 from pathlib import Path
@@ -58,7 +60,7 @@ from workbench.fileio import atomic_writer
 from workbench.ishihara.glyphs import text_mask
 from workbench.ishihara.packing import DotLayout, pack_dots
 from workbench.ishihara.palette import Palette, design_palette
-from workbench.ishihara.paper import PAPER_TABLE6_REFERENCE
+from workbench.ishihara.paper import PAPER_TABLE5, PAPER_TABLE6_REFERENCE
 from workbench.ishihara.reading import NOTHING_READ, dots_in_mask
 
 __all__ = [
@@ -74,6 +76,8 @@ __all__ = [
     "paper_plate_set_specs",
     "generate_plate",
     "generate_plate_set",
+    "PAPER_FAMILY_OF_COLOUR",
+    "paper_coloured_plate",
     "save_plate",
     "load_plate",
     "plate_preview_srgb8",
@@ -368,6 +372,52 @@ def generate_plate_set(size: int = DEFAULT_PLATE_SIZE, seed: int = DEFAULT_SEED)
     return tuple(generate_plate(spec, size, seed + spec.number) for spec in paper_plate_set_specs())
 
 
+PAPER_FAMILY_OF_COLOUR = {
+    "green-p": "green", "green-d": "green", "ochre": "ochre", "purple": "purple",
+    "blue-green-p": "bluish-green", "blue-green-d": "bluish-green", "bluish-green": "bluish-green",
+}
+"""Designed palette colour → the family of the paper's Table 5 it was derived from."""
+
+
+def paper_coloured_plate(plate: Plate, palette: Palette | None = None) -> Plate:
+    """``plate`` with its dots in the paper's own ten colours (Table 5's P1–P10).
+
+    Each dot takes a colour of the family its designed colour comes from
+    (:data:`PAPER_FAMILY_OF_COLOUR`: greens → P1–P3, ochre → P4–P6, purple →
+    P7–P8, blue-greens → P9–P10). Within a family the dots, ranked by their
+    lightness factor, are dealt out to the family's colours from the darkest
+    to the lightest in equal shares, so the plate keeps its figure, its
+    lightness mosaic and its layout. The dots' lightness factors become 1: the
+    paper's colours carry their own luminance factors. Plate 3 of the paper's
+    set (a transformation plate) uses all ten, like the paper's plate 3.
+
+    Raises
+    ------
+    InputError
+        A dot colour with no family in Table 5 (the classification plate's reds).
+    """
+    palette = palette or design_palette()
+    colours = np.asarray(plate.dot_colours, dtype=object)
+    unknown = sorted(set(colours) - set(PAPER_FAMILY_OF_COLOUR))
+    if unknown:
+        raise InputError(f"plate {plate.spec.number} ({plate.spec.kind}) has dot colours "
+                         f"{unknown} with no family among the paper's Table 5 colours; use a "
+                         "plate without them (e.g. plate 3)")
+    families = np.array([PAPER_FAMILY_OF_COLOUR[c] for c in colours], dtype=object)
+    recoloured = np.empty(len(colours), dtype=object)
+    for family in sorted(set(families)):
+        members = np.flatnonzero(families == family)
+        dots = sorted((d for d in PAPER_TABLE5 if d.family == family),
+                      key=lambda d: d.calculated_xyY[2])
+        ranked = members[np.argsort(plate.dot_lightness[members], kind="stable")]
+        for share, dot in zip(np.array_split(ranked, len(dots)), dots):
+            recoloured[share] = dot.dot
+    names = tuple(str(c) for c in recoloured)
+    return Plate(spec=plate.spec, layout=plate.layout, dot_colours=names,
+                 dot_lightness=np.ones(len(names)), dot_reflectances=palette.reflectances(names),
+                 paper_reflectance=plate.paper_reflectance, seed=plate.seed)
+
+
 def save_plate(plate: Plate, path) -> Path:
     """Write ``plate`` as a compressed ``.npz``, atomically (:func:`workbench.fileio.atomic_writer`).
 
@@ -396,7 +446,17 @@ _PLATE_ARRAYS = ("labels", "dot_reflectances", "wavelengths", "paper_reflectance
 
 
 def load_plate(path) -> Plate:
-    """Read a plate written by :func:`save_plate`, checking it; errors name the file and the fix."""
+    """Read a plate written by :func:`save_plate`, checking it.
+
+    Raises
+    ------
+    SpectrumFileError
+        Naming the file, the problem and the fix: no such file; not an
+        ``.npz``, or one truncated or corrupted (a cut download, a full disk:
+        no central directory, a bad CRC, a cut compressed stream); arrays
+        missing or unreadable; a bad plate description; shapes, wavelengths or
+        reflectances that do not make a plate.
+    """
     path = Path(path)
     fix = "regenerate it with 'python -m workbench ishihara generate'"
     try:
@@ -407,7 +467,11 @@ def load_plate(path) -> Plate:
             arrays = {k: data[k] for k in _PLATE_ARRAYS}
     except FileNotFoundError:
         raise SpectrumFileError(path, None, "no such file", "give the path of a plate .npz") from None
-    except (OSError, ValueError) as error:
+    except (zipfile.BadZipFile, zlib.error, EOFError) as error:
+        # a truncated or corrupted archive: no central directory, a bad CRC, a cut stream
+        raise SpectrumFileError(path, None, f"truncated or corrupted .npz ({error})",
+                                fix) from None
+    except (OSError, ValueError, KeyError) as error:
         raise SpectrumFileError(path, None, f"not a readable .npz ({error})", fix) from None
     try:
         meta = json.loads(str(arrays["meta"]))

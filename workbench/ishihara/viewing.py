@@ -15,7 +15,11 @@ Viewing paths (:data:`VIEWING_PATHS`):
     the display inverse of the dot's ``XYZ_t`` under the source.
 
 The headset is :func:`workbench.ishihara.hmd.calibrated_headset`: the simulated
-HTC Vive, with the display model fitted to its measured calibration.
+HTC Vive with Table 1's black and a 5 % channel interaction, with the display
+model the workbench would use: the paper's model extended with what the
+diagnosis of its measured calibration found. Level 2 here uses the full-band
+reference path (:func:`~workbench.colour_management.level2_texture`); Table 5
+checks the real-time basis path against it.
 
 Scale: radiance in the source's (``physical``) or the headset's
 (W·sr⁻¹·m⁻²·nm⁻¹) unit; the observers' chromatic coordinates do not depend on it.
