@@ -1,6 +1,7 @@
 import colour
 import numpy as np
 import pytest
+from scipy.signal import find_peaks
 
 from workbench.errors import InputError, SpectrumFileError
 from workbench.illuminants import (
@@ -10,7 +11,7 @@ from workbench.illuminants import (
     read_illuminant_file,
     write_illuminant_file,
 )
-from workbench.illuminants.synthesized import SIMULATOR_CHANNELS
+from workbench.illuminants.synthesized import SIMULATOR_CHANNELS, d65_simulator_channel_powers
 
 
 def test_builtin_ids_are_stable():
@@ -51,16 +52,20 @@ def test_two_peak_source_is_a_d65_metamer_with_very_low_fidelity():
     d65 = illuminant_metrics(get_illuminant("cie-d65"))
     assert np.hypot(*(np.array(m.xy) - d65.xy)) < 1e-4
     assert m.Rf < 10
-    # two narrow peaks: almost all power within ±25 nm of two wavelengths
-    peaks = source.wavelengths[np.argsort(source.values)[-1]]
-    assert 440 <= peaks <= 600
+    # exactly two emission peaks, one blue and one yellow
+    peaks, _ = find_peaks(source.values, prominence=0.05 * source.values.max())
+    assert len(peaks) == 2
+    blue, yellow = source.wavelengths[peaks]
+    assert 430 <= blue <= 480 and 555 <= yellow <= 600
     assert m.level1_mean_dE00 > 5  # level 1 is not enough under it
 
 
 def test_d65_simulator_has_at_least_five_peaks_and_good_fidelity():
     m = illuminant_metrics(get_illuminant("d65-simulator"))
     d65 = illuminant_metrics(get_illuminant("cie-d65"))
+    powers = d65_simulator_channel_powers()
     assert len(SIMULATOR_CHANNELS) >= 5
+    assert np.sum(powers > 0.02 * powers.max()) >= 5  # at least five LEDs really contribute
     assert np.hypot(*(np.array(m.xy) - d65.xy)) < 0.005
     assert m.Rf >= 85
 

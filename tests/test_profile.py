@@ -60,3 +60,19 @@ def test_schema_is_valid_json_schema():
     import jsonschema
 
     jsonschema.Draft202012Validator.check_schema(json.loads(SCHEMA_PATH.read_text()))
+
+
+def test_an_extended_profile_with_unusable_parameters_is_refused(tmp_path):
+    from workbench.cli.diagnose import export_profile
+    from workbench.diagnostics import diagnose
+    from workbench.simulated_sessions import simulate_session
+
+    path = export_profile(diagnose(simulate_session({"tone-curve-shape": 0.05}, seed=2)),
+                          tmp_path / "ok.vrprofile.json")
+    document = json.loads(path.read_text())
+    assert load_profile(path).display_model().model_id == "extended"
+    document["display_model"]["parameters"]["tone"][0] = {"form": "power", "gamma": 0}
+    bad = tmp_path / "bad.vrprofile.json"
+    bad.write_text(json.dumps(document))
+    with pytest.raises(ProfileError, match="gamma must be a positive number"):
+        load_profile(bad)

@@ -32,7 +32,10 @@ def reproduction():
 
 def test_rf_alone_predicts_level1_error_worse_than_rf_and_cct(reproduction):
     assert reproduction.rf_spearman_rho < 0
-    assert reproduction.predictor_rf_cct.r_squared > reproduction.predictor_rf.r_squared
+    # nested fits: compare adjusted R², and ask for a real margin
+    gain = (reproduction.predictor_rf_cct.adjusted_r_squared
+            - reproduction.predictor_rf.adjusted_r_squared)
+    assert gain > 0.3, gain
     assert len(reproduction.library) >= 60
 
 

@@ -30,7 +30,14 @@ from workbench.colorimetry import (
     reflectances_to_XYZ_relative,
     white_XYZ_relative,
 )
-from workbench.display import DisplayModel, SRGBDisplay, quantize_dac, srgb_decode, srgb_encode
+from workbench.display import (
+    DisplayModel,
+    SRGBDisplay,
+    check_observer,
+    quantize_dac,
+    srgb_decode,
+    srgb_encode,
+)
 from workbench.errors import InputError
 
 __all__ = [
@@ -98,6 +105,7 @@ def light_colour(illuminant, display: DisplayModel | None = None, *, k: float = 
                  observer: str = DEFAULT_OBSERVER) -> LightColour:
     """Level-1 light colour of ``illuminant`` for ``display`` (default: ideal sRGB)."""
     display = display or SRGBDisplay()
+    check_observer(display, observer)
     XYZ = white_XYZ_relative(illuminant, observer, k=k, Y_white=float(display.white_XYZ[1]))
     return light_colour_from_XYZ(XYZ, display)
 
@@ -128,6 +136,7 @@ def target_dac(reflectances, illuminant, display: DisplayModel | None = None, *,
                ) -> tuple[np.ndarray, np.ndarray]:
     """Theoretical ``DAC_t`` (float, 0..255) and ``XYZ_t`` of surfaces under ``illuminant``."""
     display = display or SRGBDisplay()
+    check_observer(display, observer)
     XYZ_t = reflectances_to_XYZ_relative(reflectances, illuminant, observer, k=k,
                                          Y_white=float(display.white_XYZ[1]),
                                          wavelengths=wavelengths)

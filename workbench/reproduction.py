@@ -164,6 +164,8 @@ class Reproduction:
                 "p_value": self.rf_spearman_p,
                 "r_squared_rf_only": self.predictor_rf.r_squared,
                 "r_squared_rf_and_cct": self.predictor_rf_cct.r_squared,
+                "adjusted_r_squared_rf_only": self.predictor_rf.adjusted_r_squared,
+                "adjusted_r_squared_rf_and_cct": self.predictor_rf_cct.adjusted_r_squared,
                 "fit_rf_and_cct": dict(zip(self.predictor_rf_cct.descriptors,
                                            self.predictor_rf_cct.coefficients)),
                 "note": "level 1's mean CIEDE2000 on the 99 CIE 2017 samples vs CIE Rf across "
@@ -250,6 +252,13 @@ class Level1Predictor:
     descriptors: tuple[str, ...]
     coefficients: tuple[float, ...]
     r_squared: float
+    n: int
+
+    @property
+    def adjusted_r_squared(self) -> float:
+        """R² penalized for the number of descriptors (comparable across nested fits)."""
+        p = len(self.descriptors) - 1
+        return 1.0 - (1.0 - self.r_squared) * (self.n - 1) / (self.n - p - 1)
 
 
 def _mired_distance(CCT: np.ndarray) -> np.ndarray:
@@ -267,7 +276,8 @@ def _predictor(rows, use_mired: bool) -> Level1Predictor:
     coefficients, *_ = np.linalg.lstsq(X, y, rcond=None)
     residual = y - X @ coefficients
     r_squared = 1.0 - residual @ residual / np.sum((y - y.mean()) ** 2)
-    return Level1Predictor(tuple(names), tuple(float(c) for c in coefficients), float(r_squared))
+    return Level1Predictor(tuple(names), tuple(float(c) for c in coefficients), float(r_squared),
+                           len(rows))
 
 
 def reproduce(k: float = DEFAULT_K, progress=None) -> Reproduction:

@@ -121,6 +121,11 @@ class Session:
         return self.subset(~self.mask(*kinds))
 
     @property
+    def has_white(self) -> bool:
+        """Whether a white (255, 255, 255) was measured."""
+        return bool(np.any(self.mask("white") | np.all(self.rgb >= 255, axis=1)))
+
+    @property
     def white_XYZ(self) -> np.ndarray:
         """Mean XYZ of the ``white`` rows (or of the rows at DAC 255,255,255)."""
         rows = self.XYZ[self.mask("white") | np.all(self.rgb >= 255, axis=1)]

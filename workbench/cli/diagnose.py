@@ -67,14 +67,24 @@ def _print_text(diagnosis) -> None:
     if not result["findings"]:
         print("findings  none beyond noise: the paper's model is adequate for this display")
     terms = {t["effect"]: t for t in ext["terms"]}
+    attribution = result["attribution"]
+    contributions = ({t["effect"]: t for t in attribution["terms"]} if attribution else {})
     for i, finding in enumerate(result["findings"], start=1):
         print(f"finding {i} {finding['effect']} (score {finding['score']:.1f}): {finding['evidence']}")
         term = terms[finding["effect"]]
-        print(f"          → {term['term']}, fitted on {term['fitted_on']}")
+        line = f"          → {term['term']}, fitted on {term['fitted_on']}"
+        if finding["effect"] in contributions:
+            line += (f"; without it held-out mean ΔE00 would be "
+                     f"{contributions[finding['effect']]['mean_dE00_without']:.2f}")
+        print(line)
     print(f"extended  {ext['model']}: {figures(ext)}  [{ext['protocol']}]")
+    if attribution:
+        print(f"refit     the extension's fitting with no term: ΔE00 mean "
+              f"{attribution['no_terms_refit']['mean_dE00']:.2f} (what better use of the same rows "
+              "buys without any named effect)")
     if result["fallback"] is not None:
         print(f"fallback  {result['fallback']['model']}: {figures(result['fallback'])}  "
-              f"[{result['fallback']['protocol'].split(' (')[0]}]")
+              f"[{result['fallback']['protocol'].split(':')[0]}]")
     gain = result["gain"]["mean_dE00_reduction_pct"]
     if gain is not None:
         print(f"gain      mean ΔE00 reduced by {gain:.0f} % on colours neither model was fitted on")

@@ -102,6 +102,8 @@ def _show(args) -> int:
     print(f"  light rgb8: sRGB {metrics.rgb8_srgb}"
           + (f"   {metrics.display} {metrics.rgb8_display}" if display is not None else "")
           + ("" if metrics.light_in_gamut else "   (clipped: outside the display gamut)"))
+    if metrics.observer != "cie1931-2":
+        print("  (light colours and level-1 errors: for the display's CIE 1931 2° observer)")
     for a in metrics.level1:
         print(f"  level-1 ΔE00 on {a.sample_set:<12} mean {a.mean_dE00:5.2f}  p95 {a.p95_dE00:5.2f}"
               f"  max {a.max_dE00:5.2f} ({a.worst_sample})")

@@ -53,7 +53,8 @@ def print_reproduction(result, out=sys.stdout) -> None:
     within = sum(r.max_abs_vs_paper <= 2 for r in result.table2)
     w(f"within ±2 counts of the paper: {within} of {len(result.table2)} patches\n\n")
 
-    w("Table 3 — light sources (k = 0.85 of the display white, ideal sRGB display)\n")
+    k = result.table3[0].XYZ[1] / 100.0  # Y of the perfect diffuser, display white Y = 100
+    w(f"Table 3 — light sources (k = {k:.2f} of the display white, ideal sRGB display)\n")
     w(f"{'source':<16} {'Rf':>5} {'(paper)':>7} {'CCT':>6} {'(paper)':>7}  {'xy':>15}  "
       f"{'XYZ':>20}  {'rgb8':>11} {'(paper)':>13}\n")
     for r in result.table3:

@@ -90,8 +90,7 @@ def build_context(fit_session: Session, drift_found: bool | None = None) -> Diag
         drift_found = drift is not None and drift.span > THRESHOLDS["temporal-drift"]
     corrected = drift.correct(fit_session) if (drift is not None and drift_found) else fit_session
     black = corrected.black_XYZ
-    white = corrected.white_XYZ if corrected.mask("white").any() or np.any(
-        np.all(corrected.rgb >= 255, axis=1)) else None
+    white = corrected.white_XYZ if corrected.has_white else None
     sweeps = channel_sweeps(corrected, black)
     if white is None:  # ramps-only data (e.g. Psychtoolbox): the additive white
         white = black + sum(s.full_XYZ for s in sweeps)

@@ -95,7 +95,7 @@ def fit_extended(context: DiagnosisContext, effects, baseline=None) -> ExtendedD
         if drive.size < 3 and baseline is not None:
             curve = PowerCurve(float(baseline.gamma[sweep.channel]))
         elif "tone-curve-shape" in effects:
-            curve, _ = select_tone_curve(drive, output, forms=("gog", "extended-power", "spline"))
+            curve, _ = select_tone_curve(drive, output)
         else:
             curve = fit_tone_curve(drive, output, "power")
         tone.append(curve)

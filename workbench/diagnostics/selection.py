@@ -15,7 +15,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from workbench.colorimetry import delta_E2000
-from workbench.diagnostics.detectors import DetectorResult, DiagnosisContext, run_detectors
+from workbench.diagnostics.detectors import (
+    DetectorResult,
+    DiagnosisContext,
+    build_context,
+    run_detectors,
+)
 from workbench.diagnostics.extension import TERMS, fit_extended, fitted_on
 from workbench.display import DisplayModel, GammaMatrixDisplay
 from workbench.display.residual_lut import fit_residual_lut
@@ -59,6 +64,8 @@ class Diagnosis:
     protocol: str
     fallback_dE: np.ndarray | None = None
     fallback_model: str = ""
+    fallback_protocol: str = ""
+    attribution: dict | None = None
 
     @property
     def findings(self) -> tuple[DetectorResult, ...]:
@@ -80,6 +87,19 @@ class Diagnosis:
             return None
         return 100.0 * (base.mean_dE00 - ext.mean_dE00) / base.mean_dE00
 
+    def _attribution_json(self) -> dict | None:
+        if self.attribution is None:
+            return None
+        full = float(np.mean(self.extended_dE))
+        return {
+            "note": "the extension refitted without each term, scored on the same validation "
+                    "colours; reported only, never used to choose terms",
+            "no_terms_refit": {"mean_dE00": self.attribution["no_terms_refit_mean_dE00"]},
+            "terms": [{"effect": effect, "mean_dE00_without": value,
+                       "contribution_dE00": value - full}
+                      for effect, value in self.attribution["without_term_mean_dE00"].items()],
+        }
+
     def to_json(self) -> dict:
         base, ext = self.baseline_score, self.extended_score
         return {
@@ -96,8 +116,9 @@ class Diagnosis:
                                    for r in self.findings],
                          "validation": None if ext is None else ext.to_json()},
             "gain": {"mean_dE00_reduction_pct": self.gain_pct},
+            "attribution": self._attribution_json(),
             "fallback": None if self.fallback_dE is None else {
-                "model": self.fallback_model, "protocol": FALLBACK_PROTOCOL,
+                "model": self.fallback_model, "protocol": self.fallback_protocol,
                 "validation": score_validation(self.fallback_dE).to_json()},
             "reference_white": "measured display white (mean of the white rows), CIELAB for ΔE00",
         }
@@ -116,42 +137,107 @@ def diagnose(session: Session) -> Diagnosis:
     context, results = run_detectors(fit_session)
     found = [r.effect for r in results if r.found]
     extended = fit_extended(context, found, baseline) if found else baseline
-    white = context.white if not session.mask("white").any() else session.white_XYZ
+    white = session.white_XYZ if session.has_white else context.white
     if len(validation):
         baseline_dE = delta_E2000(baseline.forward(validation.rgb), validation.XYZ, white)
-        predicted = extended.forward(validation.rgb)
-        if "temporal-drift" in found and validation.t_s is not None:
-            predicted = predicted * context.drift.gain(validation.t_s)[:, None]
-        extended_dE = delta_E2000(predicted, validation.XYZ, white)
+        extended_dE = _score_extended(extended, context, found, validation, white)
+        attribution = _attribution(context, found, baseline, validation, white)
     else:
         baseline_dE = extended_dE = np.zeros(0)
-    fallback_dE, fallback_model = _residual_lut_fallback(extended, validation, context, found, white)
+        attribution = None
+    fallback_dE, fallback_model, fallback_protocol = _residual_lut_fallback(
+        extended, session, context, found, white)
     return Diagnosis(session=session, context=context, results=results, baseline=baseline,
                      extended=extended, white=white, baseline_dE=np.atleast_1d(baseline_dE),
                      extended_dE=np.atleast_1d(extended_dE), protocol="holdout",
-                     fallback_dE=fallback_dE, fallback_model=fallback_model)
+                     fallback_dE=fallback_dE, fallback_model=fallback_model,
+                     fallback_protocol=fallback_protocol, attribution=attribution)
+
+
+def _score_extended(model, context: DiagnosisContext, found, validation: Session, white):
+    predicted = model.forward(validation.rgb)
+    if "temporal-drift" in found and validation.t_s is not None:
+        predicted = predicted * context.drift.gain(validation.t_s)[:, None]
+    return delta_E2000(predicted, validation.XYZ, white)
+
+
+def _attribution(context: DiagnosisContext, found, baseline, validation: Session, white):
+    """What each term buys on the validation colours: the extension refitted without it.
+
+    Also the extension refitted with no term at all (same rows, same fitting as
+    the extension: black-subtracted sweeps, grey-derived points, weighted
+    curves), so a gain that comes from fitting the data better rather than
+    from a named effect shows as such. Reported, never used to choose a term.
+    """
+    if not found:
+        return None
+
+    def without(effects):
+        if "temporal-drift" in found and "temporal-drift" not in effects:
+            rebuilt = build_context(context.raw, drift_found=False)
+        else:
+            rebuilt = context
+        model = fit_extended(rebuilt, effects, baseline)
+        return float(np.mean(_score_extended(model, rebuilt, effects, validation, white)))
+
+    return {
+        "no_terms_refit_mean_dE00": without([]),
+        "without_term_mean_dE00": {effect: without([e for e in found if e != effect])
+                                   for effect in found},
+    }
 
 
 FALLBACK_FOLDS = 5
 FALLBACK_MIN_MIXTURES = 25
-FALLBACK_PROTOCOL = (f"{FALLBACK_FOLDS}-fold cross-validation on the validation colours (the "
-                     "residual LUT learns from mixtures, and the validation colours are the "
-                     "session's only mixtures)")
 
 
-def _residual_lut_fallback(model, validation: Session, context, found, white):
-    """Cross-validated CIEDE2000 of ``model`` + a 3D-LUT residual, or (None, "")."""
-    if len(validation) < FALLBACK_MIN_MIXTURES:
-        return None, ""
-    drift = (context.drift.gain(validation.t_s)[:, None]
-             if "temporal-drift" in found and validation.t_s is not None else 1.0)
-    corrected = validation.XYZ / drift
-    folds = np.random.default_rng(0).permutation(len(validation)) % FALLBACK_FOLDS
-    predicted = np.zeros_like(corrected)
-    for k in range(FALLBACK_FOLDS):
-        train = folds != k
-        fitted = fit_residual_lut(model, validation.rgb[train], corrected[train])
-        predicted[~train] = fitted.forward(validation.rgb[~train])
-    return delta_E2000(predicted * drift, validation.XYZ, white), fitted.describe()
+def _mixture_rows(session: Session) -> np.ndarray:
+    """Rows with two or more channels lit, other than white."""
+    lit = (session.rgb > 0).sum(axis=1)
+    return (lit >= 2) & ~np.all(session.rgb >= 255, axis=1)
+
+
+def _residual_lut_fallback(model, session: Session, context, found, white):
+    """CIEDE2000 on the validation colours of ``model`` + a 3D-LUT residual, its name and protocol.
+
+    The LUT always learns from every fit row (black, white, sweeps, greys,
+    mixtures) after the same drift correction as the extended model. With at
+    least :data:`FALLBACK_MIN_MIXTURES` mixtures among the fit rows it is
+    scored on the validation colours as a true holdout; otherwise the
+    validation colours are the only mixtures and it is scored by
+    :data:`FALLBACK_FOLDS`-fold cross-validation over them (each fold's LUT
+    also learns from the other folds). Returns (None, "", "") without
+    validation colours.
+    """
+    validation = session.select("validation")
+    if len(validation) < FALLBACK_FOLDS:
+        return None, "", ""
+    fit = context.fit  # drift-corrected where drift was found
+
+    def drift_of(rows):
+        if "temporal-drift" in found and rows.t_s is not None:
+            return context.drift.gain(rows.t_s)[:, None]
+        return 1.0
+
+    target = validation.XYZ / drift_of(validation)
+    n_mixtures = int(_mixture_rows(fit).sum())
+    if n_mixtures >= FALLBACK_MIN_MIXTURES:
+        fitted = fit_residual_lut(model, fit.rgb, fit.XYZ)
+        predicted = fitted.forward(validation.rgb)
+        protocol = (f"holdout: the LUT learned from the {len(fit)} fit rows "
+                    f"({n_mixtures} of them mixtures), scored on the validation colours")
+    else:
+        folds = np.random.default_rng(0).permutation(len(validation)) % FALLBACK_FOLDS
+        predicted = np.zeros_like(target)
+        for k in range(FALLBACK_FOLDS):
+            train = folds != k
+            fitted = fit_residual_lut(model, np.vstack([fit.rgb, validation.rgb[train]]),
+                                      np.vstack([fit.XYZ, target[train]]))
+            predicted[~train] = fitted.forward(validation.rgb[~train])
+        protocol = (f"{FALLBACK_FOLDS}-fold cross-validation on the validation colours: the fit "
+                    f"rows hold only {n_mixtures} mixtures, so each fold's LUT also learns from "
+                    "the other folds' validation colours")
+    return (delta_E2000(predicted * drift_of(validation), validation.XYZ, white),
+            fitted.describe(), protocol)
 
 

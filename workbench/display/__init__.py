@@ -7,7 +7,7 @@ from a profile. The diagnostics add their extensions to this registry.
 
 from __future__ import annotations
 
-from workbench.display.base import DisplayModel, as_dac, as_XYZ, quantize_dac
+from workbench.display.base import DisplayModel, as_dac, as_XYZ, check_observer, quantize_dac
 from workbench.display.extended import ExtendedDisplay
 from workbench.display.gamma_matrix import GammaMatrixDisplay, fit_power_law
 from workbench.display.residual_lut import ResidualLUTDisplay, fit_residual_lut
@@ -23,6 +23,7 @@ __all__ = [
     "SRGBDisplay",
     "as_dac",
     "as_XYZ",
+    "check_observer",
     "display_model_from_parameters",
     "fit_display_model",
     "fit_power_law",

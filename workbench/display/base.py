@@ -19,7 +19,8 @@ import numpy as np
 
 from workbench.errors import InputError
 
-__all__ = ["DisplayModel", "quantize_dac", "as_dac", "as_XYZ", "GAMUT_TOLERANCE"]
+__all__ = ["DisplayModel", "quantize_dac", "as_dac", "as_XYZ", "GAMUT_TOLERANCE",
+           "check_observer"]
 
 GAMUT_TOLERANCE = 1e-6
 """Linear drive beyond [0, 1] by more than this counts as out of gamut."""
@@ -47,6 +48,15 @@ def as_XYZ(XYZ) -> np.ndarray:
     return XYZ
 
 
+def check_observer(display: "DisplayModel", observer: str) -> None:
+    """Raise if ``observer`` is not the one the display model's XYZ are expressed for."""
+    if observer != display.observer:
+        raise InputError(
+            f"the display model ({display.describe()}) is characterized for the {display.observer} "
+            f"observer; XYZ for {observer} cannot drive it. Use --observer {display.observer} for "
+            "light colours and textures (other observers are fine for XYZ and xy alone)")
+
+
 def quantize_dac(dac) -> np.ndarray:
     """The integer DAC values (0..255) a panel receives for float DAC values."""
     return np.clip(np.round(np.asarray(dac, dtype=float)), 0, 255).astype(np.int64)
@@ -58,6 +68,10 @@ class DisplayModel(abc.ABC):
 
     #: registry id, e.g. ``"gamma-matrix"``
     model_id = ""
+
+    #: observer the model's XYZ are expressed for: a CS-2000 reports CIE 1931 2°,
+    #: and sRGB is defined for it. Colour management refuses to mix observers.
+    observer = "cie1931-2"
 
     @property
     @abc.abstractmethod

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from workbench.display.base import DisplayModel, as_dac, as_XYZ
-from workbench.display.tone_curves import ToneCurve, PowerCurve, tone_curve_from_parameters
+from workbench.display.tone_curves import ToneCurve, tone_curve_from_parameters
 
 __all__ = ["ChromaticityDrift", "ChannelInteraction", "ExtendedDisplay", "xy_to_unit_XYZ"]
 
@@ -171,11 +171,3 @@ class ExtendedDisplay(DisplayModel):
         forms = "/".join(curve.form for curve in self.tone)
         extra = ", ".join(self.components) or "no extensions"
         return f"extended ({extra}; tone {forms})"
-
-    @classmethod
-    def from_gamma_matrix(cls, model) -> "ExtendedDisplay":
-        """The paper's model expressed in this form (no extensions)."""
-        Y = model.matrix[1]
-        xy = (model.matrix[:2] / model.matrix.sum(axis=0)).T
-        return cls(black=np.zeros(3), white=model.white_XYZ, primaries_xy=xy, primaries_Y=Y,
-                   tone=tuple(PowerCurve(float(g)) for g in model.gamma))

@@ -159,13 +159,16 @@ class GammaMatrixDisplay(DisplayModel):
                 raise InputError(f"session {session.source!r}: the {kind} sweep stops at DAC "
                                  f"{levels.max():g}; the model needs the full-drive (255) primary")
             columns.append(XYZ[full].mean(axis=0))
+            if np.sum(levels > 0) < 2:
+                raise InputError(f"session {session.source!r}: the {kind} sweep has only "
+                                 f"{int(np.sum(levels > 0))} level above DAC 0; fitting its gamma "
+                                 "needs at least two (measure the 'paper' or 'quick' plan)")
             gamma, r2 = fit_power_law(levels / 255.0, XYZ[:, 1] / columns[-1][1])
             gammas.append(gamma)
             r_squared.append(r2)
         matrix = np.column_stack(columns)
-        has_white = session.mask("white").any() or np.any(np.all(session.rgb >= 255, axis=1))
         # ramps-only data (e.g. Psychtoolbox): the white is the additive one the model predicts
-        white = session.white_XYZ if has_white else matrix.sum(axis=1)
+        white = session.white_XYZ if session.has_white else matrix.sum(axis=1)
         return cls(gamma=gammas, matrix=matrix, white=white, black=session.black_XYZ,
                    r_squared=r_squared)
 

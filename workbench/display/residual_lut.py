@@ -57,10 +57,15 @@ class ResidualLUTDisplay(DisplayModel):
         return self.base.forward(rgb) + self.residual(rgb)
 
     def linear_drive(self, XYZ) -> np.ndarray:
+        """Fixed point ``rgb = base⁻¹(XYZ − R(rgb))``, until it moves < 0.01 count (≤ 100 steps)."""
         XYZ = as_XYZ(XYZ)
         rgb = self.base.inverse(XYZ)
-        for _ in range(8):
-            rgb = self.base.inverse(XYZ - self.residual(rgb))
+        for _ in range(100):
+            new = self.base.inverse(XYZ - self.residual(rgb))
+            converged = np.max(np.abs(new - rgb), initial=0.0) < 0.01
+            rgb = new
+            if converged:
+                break
         return self.base.linear_drive(XYZ - self.residual(rgb))
 
     def dac_from_drive(self, drive) -> np.ndarray:

@@ -85,6 +85,23 @@ def _drive(drive) -> np.ndarray:
     return np.clip(np.asarray(drive, dtype=float), 0.0, 1.0)
 
 
+_INVERSE_GRID = np.linspace(0.0, 1.0, 255 * 64 + 1)  # 1/64 of a DAC count
+
+
+def _table_inverse(curve: "ToneCurve", output) -> np.ndarray:
+    """Invert a monotone forward through a dense table of its own values (exact to 1/64 count)."""
+    values = np.maximum.accumulate(curve.forward(_INVERSE_GRID))
+    # the first drive reaching each output, so flat stretches invert to their start
+    return np.interp(_drive(output), values, _INVERSE_GRID, left=0.0, right=1.0)
+
+
+def _positive(name: str, value: float, form: str) -> float:
+    value = float(value)
+    if not (np.isfinite(value) and value > 0):
+        raise InputError(f"tone curve {form!r}: {name} must be a positive number, got {value!r}")
+    return value
+
+
 def _weights(output: np.ndarray) -> np.ndarray:
     # relative noise with a floor: bright levels are known to ~0.2 %, dark ones to ~1e-4 of full
     return 1.0 / (0.002 * np.abs(output) + 1e-4)
@@ -96,6 +113,9 @@ class PowerCurve(ToneCurve):
 
     form = "power"
     n_parameters = 1
+
+    def __post_init__(self):
+        object.__setattr__(self, "gamma", _positive("gamma", self.gamma, self.form))
 
     def forward(self, drive):
         return _drive(drive) ** self.gamma
@@ -122,15 +142,19 @@ class GOGCurve(ToneCurve):
     form = "gog"
     n_parameters = 2
 
+    def __post_init__(self):
+        object.__setattr__(self, "gamma", _positive("gamma", self.gamma, self.form))
+        if not (np.isfinite(self.offset) and -1.0 < self.offset < 1.0):
+            raise InputError(f"tone curve 'gog': offset must lie in (-1, 1), got {self.offset!r}")
+
     def forward(self, drive):
         return np.maximum(0.0, (1.0 - self.offset) * _drive(drive) + self.offset) ** self.gamma
 
     def inverse(self, output):
-        base = _drive(output) ** (1.0 / self.gamma)
-        drive = (base - self.offset) / (1.0 - self.offset)
-        if self.offset < 0:  # below the crush every drive gives 0: take the threshold
-            drive = np.where(base <= 0, -self.offset / (1.0 - self.offset), drive)
-        return np.clip(drive, 0.0, 1.0)
+        """Closed form; output 0 (black) inverts to DAC 0, anything brighter to above the toe."""
+        output = _drive(output)
+        drive = (output ** (1.0 / self.gamma) - self.offset) / (1.0 - self.offset)
+        return np.where(output <= 0, 0.0, np.clip(drive, 0.0, 1.0))
 
     def parameters(self):
         return {"offset": float(self.offset), "gamma": float(self.gamma)}
@@ -146,23 +170,42 @@ class GOGCurve(ToneCurve):
         return cls(float(result.x[0]), float(result.x[1]))
 
 
+_HALF_COUNT = 0.5 / 255.0
+_MONOTONE_SPAN = 2.0 * np.log(1.0 / _HALF_COUNT)
+
+
 @dataclass(frozen=True)
 class ExtendedPowerCurve(ToneCurve):
+    """``L = d^(γ + β ln d)``, kept monotone: ``β ≤ γ / (2 ln 510)``.
+
+    The exponent's log-derivative ``γ + 2β ln d`` stays positive down to half
+    a DAC count; below that the curve is continued linearly to 0.
+    """
+
     gamma: float
     beta: float
 
     form = "extended-power"
     n_parameters = 2
 
+    def __post_init__(self):
+        object.__setattr__(self, "gamma", _positive("gamma", self.gamma, self.form))
+        limit = self.gamma / _MONOTONE_SPAN
+        if not (np.isfinite(self.beta) and self.beta <= limit + 1e-12):
+            raise InputError(f"tone curve 'extended-power': beta {self.beta!r} makes the curve "
+                             f"non-monotone; it must be at most gamma / (2 ln 510) = {limit:.4g}")
+
+    def _power(self, d):
+        return d ** (self.gamma + self.beta * np.log(d))
+
     def forward(self, drive):
-        d = np.maximum(_drive(drive), 1e-9)
-        return np.where(_drive(drive) <= 0, 0.0, d ** (self.gamma + self.beta * np.log(d)))
+        d = _drive(drive)
+        floor = self._power(_HALF_COUNT)
+        safe = np.maximum(d, _HALF_COUNT)
+        return np.where(d >= _HALF_COUNT, self._power(safe), floor * d / _HALF_COUNT)
 
     def inverse(self, output):
-        # monotone on [0, 1] for the fitted range: invert by a dense table
-        grid = np.linspace(0.0, 1.0, 4097)
-        values = np.maximum.accumulate(self.forward(grid))
-        return np.interp(_drive(output), values, grid)
+        return _table_inverse(self, output)
 
     def parameters(self):
         return {"gamma": float(self.gamma), "beta": float(self.beta)}
@@ -170,10 +213,16 @@ class ExtendedPowerCurve(ToneCurve):
     @classmethod
     def fit(cls, drive, output):
         w = _weights(output)
-        d = np.maximum(drive, 1e-9)
-        result = least_squares(lambda p: (d ** (p[0] + p[1] * np.log(d)) - output) * w,
-                               x0=[2.2, 0.0], bounds=([0.2, -2.0], [8.0, 2.0]))
-        return cls(float(result.x[0]), float(result.x[1]))
+        d = np.maximum(drive, _HALF_COUNT)
+
+        def curve(p):  # β = t·γ/(2 ln 510) with t ≤ 1 keeps the curve monotone
+            gamma, beta = p[0], p[1] * p[0] / _MONOTONE_SPAN
+            return d ** (gamma + beta * np.log(d))
+
+        result = least_squares(lambda p: (curve(p) - output) * w, x0=[2.2, 0.0],
+                               bounds=([0.2, -20.0], [8.0, 1.0]))
+        gamma = float(result.x[0])
+        return cls(gamma, float(result.x[1]) * gamma / _MONOTONE_SPAN)
 
 
 @dataclass(frozen=True, eq=False)
@@ -192,15 +241,18 @@ class SplineCurve(ToneCurve):
     def __post_init__(self):
         d = np.asarray(self.drive_points, dtype=float)
         L = np.asarray(self.output_points, dtype=float)
+        if (d.ndim != 1 or d.shape != L.shape or d.size < 2 or not np.all(np.isfinite(d))
+                or not np.all(np.isfinite(L)) or np.any(np.diff(d) <= 0) or np.any(np.diff(L) < 0)
+                or d[0] != 0.0 or d[-1] != 1.0):
+            raise InputError("tone curve 'spline': drive points must rise strictly from 0 to 1 "
+                             "and output points must not decrease, one per drive point")
         object.__setattr__(self, "_forward", PchipInterpolator(d, L, extrapolate=True))
-        keep = np.concatenate([[True], np.diff(L) > 1e-12])
-        object.__setattr__(self, "_inverse", PchipInterpolator(L[keep], d[keep], extrapolate=True))
 
     def forward(self, drive):
         return np.clip(self._forward(_drive(drive)), 0.0, 1.0)
 
     def inverse(self, output):
-        return np.clip(self._inverse(_drive(output)), 0.0, 1.0)
+        return _table_inverse(self, output)
 
     def parameters(self):
         return {"drive": [float(v) for v in self.drive_points],
@@ -250,9 +302,18 @@ def tone_curve_from_parameters(parameters: dict) -> ToneCurve:
     return TONE_CURVES[form](**parameters)
 
 
+def _interior(drive, output):
+    keep = (drive > 0) & (drive < 1)
+    return drive[keep], output[keep]
+
+
 def bic(curve: ToneCurve, drive, output) -> float:
-    """Bayesian information criterion of ``curve`` on (weighted) data; lower is better."""
-    drive, output = _check(drive, output)
+    """Bayesian information criterion of ``curve`` on the (weighted) interior points.
+
+    Only points with ``0 < d < 1`` count, so every form — and the spline's
+    leave-one-out score — is computed on the same ``n``; lower is better.
+    """
+    drive, output = _interior(*_check(drive, output))
     residual = (curve.forward(drive) - output) * _weights(output)
     n = drive.size
     rss = max(float(residual @ residual), 1e-300)
@@ -282,6 +343,7 @@ def select_tone_curve(drive, output, forms=("power", "gog", "extended-power", "s
 
 
 def _spline_loo_bic(drive, output) -> float:
+    """BIC-like score of the spline from leave-one-out residuals on the interior points."""
     interior = np.flatnonzero((drive > 0) & (drive < 1))
     residual = []
     for i in interior:

@@ -7,6 +7,9 @@ level-1 light colour, and how adequate level 1 is under it.
 - CCT, Duv: Ohno (2013), on the CIE 1931 2° chromaticity of the native spectrum
   (360–830 nm where the source has data), as CCT is defined.
 - ``XYZ``, ``xy``: of the perfect diffuser at ``k · Y_white`` with the chosen observer.
+  The light colours and the level-1 errors always use the display's own
+  observer (CIE 1931 2°: the CS-2000's XYZ and sRGB are defined for it), so
+  the choice of a 10° observer never mixes observers.
 - ``rgb8``: ``display_inverse(XYZ_t(ρ=1))`` for the ideal sRGB display and for a profile.
 - Level-1 adequacy (a question the paper leaves open: "setting a CFI
   reference value requires further research"): CIEDE2000 between what level 1
@@ -153,7 +156,7 @@ def level1_adequacy(illuminant: Illuminant, display: DisplayModel | None = None,
     """CIEDE2000 that level-1 colour management leaves under ``illuminant`` (module doc)."""
     display = display or SRGBDisplay()
     light = light_colour(illuminant.sd, display, k=k, observer=observer)
-    Y_white = float(display.white_XYZ[1])
+    Y_white = float(display.white_XYZ[1])  # observer checked by light_colour
     results = []
     for name in sets:
         samples = sample_set(name)
@@ -174,18 +177,20 @@ def illuminant_metrics(illuminant: Illuminant, display: DisplayModel | None = No
                        ) -> IlluminantMetrics:
     """All metrics of ``illuminant``; ``display`` defaults to the ideal sRGB display."""
     display = display or SRGBDisplay()
-    srgb_light = light_colour(illuminant.sd, SRGBDisplay(), k=k, observer=observer)
-    light = light_colour(illuminant.sd, display, k=k, observer=observer)
+    srgb = SRGBDisplay()
+    srgb_light = light_colour(illuminant.sd, srgb, k=k, observer=srgb.observer)
+    light = light_colour(illuminant.sd, display, k=k, observer=display.observer)
+    XYZ = white_XYZ_relative(illuminant.sd, observer, k=k, Y_white=float(display.white_XYZ[1]))
     Rf, Rg = fidelity_Rf_Rg(illuminant)
     CCT, Duv = CCT_Duv(illuminant)
     return IlluminantMetrics(
         id=illuminant.id, name=illuminant.name, kind=illuminant.kind,
-        xy=tuple(float(v) for v in colour.XYZ_to_xy(light.XYZ)),
-        XYZ=tuple(float(v) for v in light.XYZ),
+        xy=tuple(float(v) for v in colour.XYZ_to_xy(XYZ)),
+        XYZ=tuple(float(v) for v in XYZ),
         CCT=CCT, Duv=Duv, Rf=Rf, Rg=Rg,
         rgb8_srgb=tuple(int(v) for v in srgb_light.rgb8),
         rgb8_display=tuple(int(v) for v in light.rgb8),
         display=display.describe(), light_in_gamut=light.in_gamut,
-        level1=level1_adequacy(illuminant, display, k=k, observer=observer),
+        level1=level1_adequacy(illuminant, display, k=k, observer=display.observer),
         k=k, observer=observer,
     )

@@ -35,6 +35,7 @@ __all__ = [
     "SIMULATOR_CHANNELS",
     "design_d65_two_peak",
     "design_d65_simulator",
+    "d65_simulator_channel_powers",
     "SYNTHESIZED_SOURCES",
 ]
 
@@ -86,8 +87,8 @@ def design_d65_two_peak() -> Illuminant:
 
 
 @lru_cache(maxsize=1)
-def design_d65_simulator() -> Illuminant:
-    """A six-channel LED D65 simulator (CIE Rf ≈ 94, xy within 1e-4 of D65)."""
+def d65_simulator_channel_powers() -> np.ndarray:
+    """Fitted power of each of the :data:`SIMULATOR_CHANNELS` (relative, before normalization)."""
     d65 = _normalize(_d65())
     target = _xy(d65)
     basis = np.stack([_led(peak, fwhm) for peak, fwhm in SIMULATOR_CHANNELS], axis=1)
@@ -99,8 +100,15 @@ def design_d65_simulator() -> Illuminant:
                                100.0 * (_xy(power) - target)])
 
     fit = least_squares(residuals, x0=np.zeros(len(SIMULATOR_CHANNELS)))
-    sd = colour.SpectralDistribution(_normalize(basis @ np.exp(fit.x)), WORKING_WAVELENGTHS,
-                                     name="D65 simulator")
+    return np.exp(fit.x)
+
+
+@lru_cache(maxsize=1)
+def design_d65_simulator() -> Illuminant:
+    """A six-channel LED D65 simulator (CIE Rf ≈ 94, xy within 1e-4 of D65)."""
+    basis = np.stack([_led(peak, fwhm) for peak, fwhm in SIMULATOR_CHANNELS], axis=1)
+    sd = colour.SpectralDistribution(_normalize(basis @ d65_simulator_channel_powers()),
+                                     WORKING_WAVELENGTHS, name="D65 simulator")
     channels = ", ".join(f"{peak:.0f}" for peak, _ in SIMULATOR_CHANNELS)
     return Illuminant(
         id="d65-simulator", name="D65 simulator (6-channel LED)", kind="synthesized", sd=sd,
