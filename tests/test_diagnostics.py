@@ -224,3 +224,20 @@ def test_diagnose_benchmark_reports_its_fields():
     document = json.loads(result.stdout)
     assert document["measurements"] == 214
     assert {"wall_s_median", "in_process_s", "goal_s"} <= set(document)
+
+
+@pytest.mark.parametrize("seed", [31, 32])
+def test_an_interaction_of_another_form_is_still_named_first_with_a_gain(seed):
+    """The simulated headset limits power exactly as the extension models it (mean drive,
+    knee at one full channel); here the limit follows the luminance-weighted load with its
+    knee at half of white instead, so the extension's form is only an approximation."""
+    from workbench.session import Session
+
+    clean = simulate_session(None, seed=seed)
+    load = clean.XYZ[:, 1] / clean.white_XYZ[1]
+    limited = clean.XYZ * (1 - 0.12 * np.clip((load - 0.5) / 0.5, 0, 1))[:, None]
+    session = Session(kind=clean.kind, rgb=clean.rgb, XYZ=limited, t_s=clean.t_s,
+                      source="luminance-weighted power limit")
+    diagnosis = diagnose(session)
+    assert diagnosis.findings[0].effect == "channel-interaction"
+    assert diagnosis.gain_pct >= 30
