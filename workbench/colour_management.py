@@ -48,7 +48,6 @@ __all__ = [
     "light_colour",
     "light_colour_from_XYZ",
     "engine_render",
-    "level1_render",
     "level2_texture",
     "level2_albedo8",
     "target_dac",
@@ -126,9 +125,6 @@ def engine_render(texture_rgb8, light_rgb8) -> np.ndarray:
     linear = srgb_decode(texture / 255.0) * srgb_decode(light / 255.0)
     return quantize_dac(255.0 * srgb_encode(linear))
 
-
-level1_render = engine_render
-"""Level 1: authored texels under the managed light (the same engine arithmetic)."""
 
 
 def target_dac(reflectances, illuminant, display: DisplayModel | None = None, *,

@@ -31,19 +31,6 @@ DEFAULT_REPEATABILITY = 0.001
 """Whole-spectrum relative noise of one measurement (the emulator's default)."""
 
 
-_TIMING = {}
-
-
-def _measurement_s(radiance: np.ndarray) -> float:
-    """The emulator's modelled time for a radiance, memoized (plans repeat their patches)."""
-    key = radiance.tobytes()
-    if key not in _TIMING:
-        if "model" not in _TIMING:
-            _TIMING["model"] = InstrumentTimingModel()
-        _TIMING[key] = _TIMING["model"].measurement_s(radiance)
-    return _TIMING[key]
-
-
 def random_effect_magnitude(effect: str, rng: np.random.Generator) -> float:
     """A magnitude drawn uniformly from the headset effect's realistic range."""
     from instruments.headset import HEADSET_EFFECTS
@@ -78,7 +65,8 @@ def simulate_session(effects: dict | None = None, seed: int = 0, *,
     headset = SimulatedHeadset(effects, seed=unit_seed, white_luminance=white_luminance)
     # the session clock: each patch is measured after the previous one ended
     clean = headset.radiance(rgb, 0.0)
-    durations = np.array([_measurement_s(spectrum) for spectrum in clean])
+    timing = InstrumentTimingModel()
+    durations = np.array([timing.measurement_s(spectrum) for spectrum in clean])
     t_end = np.cumsum(durations)
     headset.session_length_s = float(t_end[-1])
     spectra = np.stack([headset.radiance(rgb[i], float(t_end[i])) for i in range(len(rgb))])

@@ -17,7 +17,7 @@ from workbench.errors import InputError
 from workbench.session import Session
 
 __all__ = ["DriftCorrection", "ChannelSweep", "estimate_drift", "channel_sweeps",
-           "fit_chromaticity_drift", "fit_rows", "xy_of", "MIN_CHROMATICITY_OUTPUT"]
+           "fit_chromaticity_drift", "xy_of", "MIN_CHROMATICITY_OUTPUT"]
 
 
 def xy_of(XYZ: np.ndarray) -> np.ndarray:
@@ -25,11 +25,6 @@ def xy_of(XYZ: np.ndarray) -> np.ndarray:
     total = XYZ.sum(axis=-1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         return XYZ[..., :2] / total
-
-
-def fit_rows(session: Session) -> Session:
-    """The rows a model may be fitted on: everything but ``validation``."""
-    return session.without("validation")
 
 
 @dataclass(frozen=True, eq=False)

@@ -23,7 +23,7 @@ from workbench.display.base import DisplayModel, as_dac
 from workbench.errors import InputError
 from workbench.session import Session
 
-__all__ = ["GammaMatrixDisplay", "fit_gamma_matrix", "fit_power_law", "RAMP_KINDS"]
+__all__ = ["GammaMatrixDisplay", "fit_power_law", "RAMP_KINDS"]
 
 RAMP_KINDS = ("ramp-r", "ramp-g", "ramp-b")
 
@@ -175,5 +175,3 @@ class GammaMatrixDisplay(DisplayModel):
     def describe(self) -> str:
         return "gamma-matrix (γ = " + ", ".join(f"{g:.2f}" for g in self.gamma) + ")"
 
-
-fit_gamma_matrix = GammaMatrixDisplay.fit
