@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
 # Check (and, as root, install) the Debian packages the workbench needs beyond
-# a fresh machine: Python's venv module, and what Qt, the 3D view and the
-# headless GUI tests need (design notes §8). Never fails the build for a
+# a fresh machine: Python's venv module, what Qt, the 3D view and the
+# headless GUI tests need (design notes §8), ArgyllCMS (the peer profiler the
+# diagnosis is compared with) and the shader/C# compilers the runtime-bundle
+# conformance tests run (glslang, SPIRV-Tools, SPIRV-Cross, mono's mcs). Never fails the build for a
 # missing package when not root: it says what is missing and how to install it.
 set -u
 PYTHON=${PYTHON:-python3}
 packages="xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-cursor0 libxkbcommon-x11-0 \
-libgl1 libegl1 libgl1-mesa-dri libegl-mesa0 libfontconfig1 libdbus-1-3"
+libgl1 libegl1 libgl1-mesa-dri libegl-mesa0 libfontconfig1 libdbus-1-3 \
+argyll glslang-tools spirv-tools spirv-cross mono-mcs"
 if ! "$PYTHON" -c 'import venv, ensurepip' >/dev/null 2>&1; then
     version=$("$PYTHON" -c 'import sys; print(f"{sys.version_info[0]}.{sys.version_info[1]}")' 2>/dev/null)
     packages="python${version}-venv python3-venv $packages"
