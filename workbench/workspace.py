@@ -30,7 +30,7 @@ __all__ = ["EVENTS", "DEFAULT_SOURCES", "Workspace"]
 EVENTS = ("session-changed", "diagnosis-changed", "profile-changed", "sources-changed")
 """Every event a :class:`Workspace` emits."""
 
-DEFAULT_SOURCES = ("d65", "d65-two-peak")
+DEFAULT_SOURCES = ("cie-d65", "d65-two-peak")
 """Sources selected in a new workspace: the paper's reference and its metamer."""
 
 
