@@ -314,6 +314,11 @@ class Journal:
         """Patches whose latest attempt failed, in plan order."""
         return [r for _, r in sorted(self.latest().items()) if not r.ok]
 
+    def superseded_records(self) -> list:
+        """Records a later record of the same patch replaced (failed attempts, re-measurements), in file order."""
+        latest = self.latest()
+        return [r for r in self.records if latest[r.index] is not r]
+
     def session_end_s(self) -> float:
         """Session time at which the last journaled patch ended (0 for none)."""
         return max((r.t_s + r.duration_s for r in self.records), default=0.0)

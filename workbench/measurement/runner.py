@@ -22,7 +22,10 @@ Then:
   with :class:`RunAborted`, naming the patch; the journal keeps every earlier
   measurement, and a resumed run starts with that patch;
 * a resumed run measures the patches that have no record yet and those whose
-  latest attempt failed, never one that was measured;
+  latest attempt failed, never one that was measured, unless it is asked to
+  re-measure it (``remeasure``): the journal then keeps both records, the
+  newer one wins (:meth:`~workbench.measurement.journal.Journal.latest`), and
+  the resume record names the patches re-measured;
 * at the end the session is exported as ``session.csv`` (with ``nm380`` …
   ``nm780`` spectral columns) and ``session.ti3``.
 
@@ -302,7 +305,7 @@ class MeasurementRun:
                  display, meter: Meter, clock: SessionClock, *,
                  on_countdown: Callable[[float, float], None] | None = None,
                  settle_s: float = 0.0, max_consecutive_failures: int = 3,
-                 wall_clock: Callable[[], float] = time.monotonic):
+                 wall_clock: Callable[[], float] = time.monotonic, remeasure=()):
         self.out_dir = Path(out_dir)
         self.header = header
         self.plan: MeasurementPlan = header.plan
@@ -317,6 +320,7 @@ class MeasurementRun:
         self._records: list = [] if journal is None else list(journal.records)
         self._latest: dict = {} if journal is None else journal.latest()
         self._resumed = journal is not None
+        self._remeasure = {int(i) for i in remeasure}
         self._cancel = threading.Event()
         self._running = threading.Event()
         self._running.set()
@@ -360,7 +364,7 @@ class MeasurementRun:
     def resume_session(cls, out_dir, display, meter: Meter, *, plan: MeasurementPlan | None = None,
                        journal: Journal | None = None, resume_details: dict | None = None,
                        clock: Callable[[JournalHeader, Journal | None], SessionClock] | None = None,
-                       **options) -> "MeasurementRun":
+                       remeasure=(), **options) -> "MeasurementRun":
         """Continue the session journaled in ``out_dir``.
 
         Parameters
@@ -376,13 +380,18 @@ class MeasurementRun:
             a simulated instrument).
         clock : callable, optional
             As for :meth:`start`.
+        remeasure : iterable of int, optional
+            Plan indices to measure again even though they were measured; the
+            journal keeps the earlier record, the new one supersedes it, and
+            the resume record lists them as ``"remeasure"``.
         **options
             As for :meth:`start`.
 
         Raises
         ------
         InputError
-            If ``plan`` differs from the journal's, or the instrument is another one.
+            If ``plan`` differs from the journal's, or the instrument is
+            another one, or ``remeasure`` names an index outside the plan.
         JournalBusyError
             If another run is writing the journal.
         """
@@ -404,9 +413,16 @@ class MeasurementRun:
                 f"{journal.path} was measured with instrument serial {header.instrument.get('serial')!r}, "
                 f"this one is {identity.get('serial')!r}; resume with the same instrument, or start a new run"
             )
-        writer = JournalWriter.append_to(journal, resume_details)
+        remeasure = sorted({int(i) for i in remeasure})
+        outside = [i for i in remeasure if not 0 <= i < len(header.plan)]
+        if outside:
+            raise InputError(f"cannot re-measure journal index {outside[0]}: the plan of {journal.path} "
+                             f"has indices 0 to {len(header.plan) - 1}")
+        details = {**(resume_details or {}), **({"remeasure": remeasure} if remeasure else {})}
+        writer = JournalWriter.append_to(journal, details or None)
         make_clock = clock or (lambda h, j: WallSessionClock(h.started_epoch_s))
-        return cls(out_dir, header, journal, writer, display, meter, make_clock(header, journal), **options)
+        return cls(out_dir, header, journal, writer, display, meter, make_clock(header, journal),
+                   remeasure=remeasure, **options)
 
     # -- control (any thread) -----------------------------------------------------------
 
@@ -430,8 +446,9 @@ class MeasurementRun:
     # -- the run ------------------------------------------------------------------------
 
     def pending_indices(self) -> list:
-        """Plan indices still to measure: no record yet, or the latest attempt failed."""
-        return [i for i in range(len(self.plan)) if i not in self._latest or not self._latest[i].ok]
+        """Plan indices still to measure: no record yet, the latest attempt failed, or asked to re-measure."""
+        return [i for i in range(len(self.plan))
+                if i not in self._latest or not self._latest[i].ok or i in self._remeasure]
 
     def _done(self) -> int:
         return sum(1 for r in self._latest.values() if r.ok)
@@ -478,6 +495,10 @@ class MeasurementRun:
                     break
                 record, wall_s = measured
                 record = self._writer.write_record(record)
+                if index in self._latest:
+                    _LOG.info("%s: the new record supersedes the one measured at t = %.1f s (the journal "
+                              "keeps both)", _where(index, patch, total), self._latest[index].t_s)
+                self._remeasure.discard(index)
                 self._records.append(record)
                 self._latest[index] = record
                 self.durations.observe(patch, record.Lv, wall_s)
