@@ -5,6 +5,10 @@ A :class:`Session` holds what was measured on a display: for each row its
 ``validation``, ``grey``, ``mixture``), the DAC triplet shown (0..255), the
 absolute tristimulus values measured (cd/m² scale), optionally the time since
 the session began (``t_s``) and the spectral radiance (``nm380`` … ``nm780``).
+Patches shown as a window on a surround (for displays whose output depends on
+the rest of the picture, ``apl-dependence``) carry ``window`` (the patch's
+fraction of the field, 0..1, default 1 = full field) and the surround's DAC
+values ``sr, sg, sb`` (default 0); sessions without them are full-field.
 
 The CSV has a header row; columns come in any order and are matched
 case-insensitively. Rows of kind ``validation`` are never used to fit a model
@@ -57,6 +61,13 @@ class Session:
         Spectral radiance, W·sr⁻¹·m⁻²·nm⁻¹.
     source : str
         Where the data came from (file name or description).
+    metadata : dict
+        Reader-specific facts (format, instrument, signal encoding).
+    window : ndarray, shape (N,), or None
+        Fraction of the field the patch covers, 0 < window <= 1; ``None``: every
+        patch full-field.
+    surround : ndarray, shape (N, 3), or None
+        DAC values (0..255) of the rest of the field; ``None``: black.
     """
 
     kind: np.ndarray
@@ -67,6 +78,8 @@ class Session:
     spectra: np.ndarray | None = None
     source: str = ""
     metadata: dict = field(default_factory=dict)
+    window: np.ndarray | None = None
+    surround: np.ndarray | None = None
 
     def __post_init__(self):
         kind = np.asarray(self.kind, dtype=object)
@@ -90,6 +103,40 @@ class Session:
         if self.spectra is not None:
             object.__setattr__(self, "spectra", np.asarray(self.spectra, dtype=float))
             object.__setattr__(self, "wavelengths", np.asarray(self.wavelengths, dtype=float))
+        self._check_window_surround()
+
+    def _check_window_surround(self) -> None:
+        if self.window is None and self.surround is None:
+            return
+        n = len(self.kind)
+        window = np.ones(n) if self.window is None else np.asarray(self.window, dtype=float).reshape(-1)
+        surround = (np.zeros((n, 3)) if self.surround is None
+                    else np.asarray(self.surround, dtype=float).reshape(-1, 3))
+        if len(window) != n or len(surround) != n:
+            raise ValueError(f"session {self.source!r}: window and surround have {len(window)} and "
+                             f"{len(surround)} rows, the session {n}; give one per row")
+        if not np.all((window > 0) & (window <= 1)):
+            raise ValueError(f"session {self.source!r}: window values must lie in (0, 1] "
+                             "(the patch's fraction of the field)")
+        if not np.all((surround >= 0) & (surround <= 255)):
+            raise ValueError(f"session {self.source!r}: surround DAC values must lie in 0..255")
+        object.__setattr__(self, "window", window)
+        object.__setattr__(self, "surround", surround)
+
+    @property
+    def has_surround_data(self) -> bool:
+        """Whether any patch was shown as a window smaller than the field or on a lit surround."""
+        return self.window is not None and bool(np.any(self.window < 1) or np.any(self.surround > 0))
+
+    @property
+    def window_or_full(self) -> np.ndarray:
+        """The ``window`` column, ones (full field) where the session has none."""
+        return np.ones(len(self)) if self.window is None else self.window
+
+    @property
+    def surround_or_black(self) -> np.ndarray:
+        """The surround DAC values ``(N, 3)``, zeros (black) where the session has none."""
+        return np.zeros((len(self), 3)) if self.surround is None else self.surround
 
     def __len__(self) -> int:
         return len(self.kind)
@@ -110,6 +157,8 @@ class Session:
             spectra=None if self.spectra is None else self.spectra[mask],
             source=self.source,
             metadata=dict(self.metadata),
+            window=None if self.window is None else self.window[mask],
+            surround=None if self.surround is None else self.surround[mask],
         )
 
     def select(self, *kinds: str) -> "Session":
@@ -173,12 +222,17 @@ def read_session_csv(path: str | os.PathLike) -> Session:
         if missing:
             raise SpectrumFileError(
                 path, 1, f"the header lacks column(s) {missing}",
-                "the header must name kind,r,g,b,X,Y,Z (any order, any case); t_s and nm380..nm780 are optional",
+                "the header must name kind,r,g,b,X,Y,Z (any order, any case); t_s, window, sr,sg,sb "
+                "and nm380..nm780 are optional",
             )
         spectral = sorted(
             ((int(m.group(1)), i) for name, i in columns.items() if (m := _SPECTRAL.match(name))),
         )
-        kinds, rgb, XYZ, t_s, spectra = [], [], [], [], []
+        surround_columns = [c for c in ("sr", "sg", "sb") if c in columns]
+        if surround_columns and len(surround_columns) != 3:
+            raise SpectrumFileError(path, 1, f"the header has {surround_columns} but not all of sr,sg,sb",
+                                    "give the surround as three columns sr,sg,sb (DAC 0..255) or none")
+        kinds, rgb, XYZ, t_s, spectra, window, surround = [], [], [], [], [], [], []
         for line, row in enumerate(reader, start=2):
             if not row or all(not cell.strip() for cell in row):
                 continue
@@ -200,6 +254,18 @@ def read_session_csv(path: str | os.PathLike) -> Session:
             XYZ.append([_number(row[columns[c]], path, line, c.upper()) for c in "xyz"])
             if "t_s" in columns:
                 t_s.append(_number(row[columns["t_s"]], path, line, "t_s"))
+            if "window" in columns:
+                fraction = _number(row[columns["window"]], path, line, "window")
+                if not 0 < fraction <= 1:
+                    raise SpectrumFileError(path, line, f"window {fraction:g} outside (0, 1]",
+                                            "window is the patch's fraction of the field, 1 = full field")
+                window.append(fraction)
+            if surround_columns:
+                dac = [_number(row[columns[c]], path, line, c) for c in ("sr", "sg", "sb")]
+                if any(v < 0 or v > 255 for v in dac):
+                    raise SpectrumFileError(path, line, f"surround DAC values {dac} outside 0..255",
+                                            "sr,sg,sb are the surround's 8-bit DAC values 0..255")
+                surround.append(dac)
             if spectral:
                 spectra.append([_number(row[i], path, line, f"nm{w}") for w, i in spectral])
     if not kinds:
@@ -213,6 +279,8 @@ def read_session_csv(path: str | os.PathLike) -> Session:
         wavelengths=np.array([w for w, _ in spectral], dtype=float) if spectral else None,
         spectra=np.array(spectra) if spectral else None,
         source=str(path),
+        window=np.array(window) if window else None,
+        surround=np.array(surround) if surround else None,
     )
 
 
@@ -222,6 +290,8 @@ def write_session_csv(session: Session, path: str | os.PathLike) -> Path:
     header = ["kind", "r", "g", "b", "X", "Y", "Z"]
     if session.t_s is not None:
         header.append("t_s")
+    if session.window is not None:
+        header += ["window", "sr", "sg", "sb"]
     if session.spectra is not None:
         header += [f"nm{int(round(w))}" for w in session.wavelengths]
     with atomic_writer(path, newline="") as handle:
@@ -232,6 +302,8 @@ def write_session_csv(session: Session, path: str | os.PathLike) -> Path:
                    *(f"{v:.6g}" for v in session.XYZ[i])]
             if session.t_s is not None:
                 row.append(f"{session.t_s[i]:.3f}")
+            if session.window is not None:
+                row += [f"{session.window[i]:.6g}", *(f"{v:g}" for v in session.surround[i])]
             if session.spectra is not None:
                 row += [f"{v:.6g}" for v in session.spectra[i]]
             writer.writerow(row)
