@@ -74,5 +74,5 @@ def test_an_extended_profile_with_unusable_parameters_is_refused(tmp_path):
     document["display_model"]["parameters"]["tone"][0] = {"form": "power", "gamma": 0}
     bad = tmp_path / "bad.vrprofile.json"
     bad.write_text(json.dumps(document))
-    with pytest.raises(ProfileError, match="gamma must be a positive number"):
+    with pytest.raises(ProfileError, match="tone/0/gamma"):
         load_profile(bad)

@@ -3,19 +3,31 @@
 A profile holds the headset's display model (type, parameters, white and black
 XYZ), its validation figures and diagnosis, the engine assumptions
 (frame-buffer encoding, ``k``, observer), the level-1 lights, and optionally
-level-2 data and a 3D-LUT sidecar. :func:`load_profile` validates the file
-against ``profiles/vrprofile.schema.json`` before using anything in it and
-never executes anything from it; :func:`save_profile` writes atomically.
+level-2 data, a 3D-LUT sidecar (``display_inverse.cube`` of a runtime bundle,
+:mod:`workbench.export`) and the runtime colour space it assumes.
+
+Reading is strict, in this order (:func:`load_profile`): the file's size
+(at most :data:`MAX_PROFILE_BYTES`), JSON without ``NaN``/``Infinity``, the
+format name and major version (a newer one is refused, naming the version
+this workbench supports), the JSON Schema ``profiles/vrprofile.schema.json``
+(every model's parameters: shapes, types, ranges), the extended model's
+component names against the diagnostics' terms, and finally the display
+model rebuilt and probed (forward and inverse give finite values). Every
+failure is a :class:`ProfileError` naming the file, the place in it and the
+fix; nothing from a file is ever executed. :func:`save_profile` validates the
+same way and writes atomically.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
 import json
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import jsonschema
+import numpy as np
 
 from profiles import SCHEMA_PATH
 from workbench import __version__
@@ -32,7 +44,11 @@ from workbench.fileio import atomic_writer
 __all__ = [
     "PROFILE_FORMAT",
     "PROFILE_FORMAT_VERSION",
+    "MAX_PROFILE_BYTES",
+    "RUNTIME_COLOUR_SPACE",
     "ProfileError",
+    "check_display_parameters",
+    "parse_profile_text",
     "Profile",
     "profile_schema",
     "validate_profile_document",
@@ -44,26 +60,158 @@ __all__ = [
 
 PROFILE_FORMAT = "vr-colour-workbench-profile"
 PROFILE_FORMAT_VERSION = 1
+"""The major format version this workbench reads and writes."""
+
+MAX_PROFILE_BYTES = 16 * 1024 * 1024
+"""Largest profile file read (a 33³ residual LUT profile is under 3 MB)."""
+
+RUNTIME_COLOUR_SPACE = (
+    "OpenXR XR_FB_color_space XR_COLOR_SPACE_UNMANAGED_FB (or a runtime that passes the "
+    "application's 8-bit values to the panel unchanged): the application's light colours, "
+    "level-2 textures and display_inverse.cube do all the colour management")
+"""The runtime colour space a profile's data assume (recorded in every exported bundle)."""
+
+_FIX = "Fix the file or export it again with 'python -m workbench diagnose SESSION --export PROFILE'"
 
 
 class ProfileError(WorkbenchError, ValueError):
     """A profile file is unreadable or does not follow the schema."""
 
 
+_SCHEMA: dict | None = None
+
+
 def profile_schema() -> dict:
     """The profile JSON Schema (draft 2020-12)."""
-    return json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
+    global _SCHEMA
+    if _SCHEMA is None:
+        _SCHEMA = json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
+    return json.loads(json.dumps(_SCHEMA))
+
+
+_VALIDATOR: jsonschema.Draft202012Validator | None = None
+
+
+def _validator() -> jsonschema.Draft202012Validator:
+    global _VALIDATOR
+    if _VALIDATOR is None:
+        _VALIDATOR = jsonschema.Draft202012Validator(profile_schema())
+    return _VALIDATOR
+
+
+def _non_finite_path(value, path=()) -> tuple | None:
+    """The path of the first NaN or infinite number in a JSON-like value, or None."""
+    if isinstance(value, float):
+        return None if math.isfinite(value) else path
+    if isinstance(value, dict):
+        items = value.items()
+    elif isinstance(value, (list, tuple)):
+        items = enumerate(value)
+    else:
+        return None
+    for key, item in items:
+        found = _non_finite_path(item, path + (key,))
+        if found is not None:
+            return found
+    return None
+
+
+def _where(path) -> str:
+    return "/".join(str(p) for p in path) or "(top level)"
+
+
+def _check_version(document: dict, source: str) -> None:
+    if document.get("format") != PROFILE_FORMAT:
+        raise ProfileError(f"{source}: format: {document.get('format')!r} is not "
+                           f"{PROFILE_FORMAT!r}; this is not a VR colour workbench profile")
+    version = document.get("format_version")
+    if isinstance(version, bool) or not isinstance(version, int):
+        raise ProfileError(f"{source}: format_version: {version!r} must be an integer "
+                           f"(this workbench reads version {PROFILE_FORMAT_VERSION}). {_FIX}")
+    if version > PROFILE_FORMAT_VERSION:
+        raise ProfileError(f"{source}: format_version {version} is newer than this workbench "
+                           f"supports (version {PROFILE_FORMAT_VERSION}); update vr-colour-workbench "
+                           "or export the profile again with this version")
 
 
 def validate_profile_document(document: dict, source: str = "profile") -> None:
-    """Raise :class:`ProfileError` naming the first schema violation and where it is."""
-    validator = jsonschema.Draft202012Validator(profile_schema())
-    errors = sorted(validator.iter_errors(document), key=lambda e: list(e.absolute_path))
-    if errors:
-        error = errors[0]
-        where = "/".join(str(p) for p in error.absolute_path) or "(top level)"
-        raise ProfileError(f"{source}: {where}: {error.message}. Fix the file or export it again "
-                           f"with 'python -m workbench diagnose SESSION --export PROFILE'")
+    """Raise :class:`ProfileError` naming the first violation and where it is.
+
+    Checks, in order: a JSON object; no NaN or infinite number; the format
+    name and a major version not newer than :data:`PROFILE_FORMAT_VERSION`;
+    the JSON Schema (which describes every display model's parameters).
+    """
+    if not isinstance(document, dict):
+        raise ProfileError(f"{source}: a profile is a JSON object, not {type(document).__name__}")
+    bad = _non_finite_path(document)
+    if bad is not None:
+        raise ProfileError(f"{source}: {_where(bad)}: NaN or infinity where a finite number "
+                           f"belongs. {_FIX}")
+    _check_version(document, source)
+    error = jsonschema.exceptions.best_match(_validator().iter_errors(document))
+    if error is not None:
+        message = error.message if len(error.message) < 300 else error.message[:300] + "…"
+        raise ProfileError(f"{source}: {_where(error.absolute_path)}: {message}. {_FIX}")
+
+
+def _extended_components(parameters: dict, source: str) -> None:
+    from workbench.diagnostics.extension import TERMS
+
+    for index, name in enumerate(parameters.get("components", ())):
+        if name not in TERMS:
+            raise ProfileError(f"{source}: display_model/parameters/components/{index}: unknown "
+                               f"component {name!r}; known: {sorted(TERMS)}. {_FIX}")
+
+
+_PROBE_DAC = np.array([[0, 0, 0], [255, 255, 255], [255, 0, 0], [0, 255, 0], [0, 0, 255],
+                       [128, 64, 32], [16, 200, 90]], dtype=float)
+
+
+def check_display_parameters(model_type: str, parameters: dict, source: str = "profile"
+                             ) -> DisplayModel:
+    """Rebuild the display model of a schema-valid profile and probe it; :class:`ProfileError` if unusable.
+
+    The model must build (its constructor's own checks: e.g. a singular
+    primaries matrix, a non-monotone tone curve), the extended model's
+    components must be known terms, and forward and inverse must give finite
+    values on a few probe colours.
+    """
+    nested = [(model_type, parameters)]
+    if model_type == "lut3d-residual":
+        nested.append((parameters.get("base_type"), parameters.get("base", {})))
+    for kind, values in nested:
+        if kind == "extended":
+            _extended_components(values, source)
+    try:
+        with np.errstate(all="ignore"):
+            model = display_model_from_parameters(model_type, parameters)
+            XYZ = model.forward(_PROBE_DAC)
+            dac = model.inverse(XYZ) if np.all(np.isfinite(XYZ)) else XYZ
+    except (WorkbenchError, KeyError, TypeError, ValueError, IndexError, ArithmeticError) as error:
+        raise ProfileError(f"{source}: display_model/parameters are unusable ({error}). {_FIX}"
+                           ) from None
+    if not (np.all(np.isfinite(XYZ)) and np.all(np.isfinite(dac))):
+        raise ProfileError(f"{source}: display_model/parameters give NaN or infinite colours "
+                           f"({model.describe()}). {_FIX}")
+    return model
+
+
+def parse_profile_text(text: str, source: str = "profile") -> "Profile":
+    """Parse and fully validate a profile's JSON text (what :func:`load_profile` reads)."""
+    def refuse_constant(name):
+        raise ProfileError(f"{source}: {name} is not a JSON number; write a finite number. {_FIX}")
+
+    if len(text) > MAX_PROFILE_BYTES:
+        raise ProfileError(f"{source}: {len(text)} characters is more than a profile holds "
+                           f"(at most {MAX_PROFILE_BYTES} bytes); is this the right file?")
+    try:
+        document = json.loads(text, parse_constant=refuse_constant)
+    except json.JSONDecodeError as error:
+        raise ProfileError(f"{source}, line {error.lineno}: not valid JSON ({error.msg}). "
+                           "Export the profile again") from None
+    except RecursionError:
+        raise ProfileError(f"{source}: nested too deeply to be a profile") from None
+    return Profile.from_document(document, source)
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,6 +234,7 @@ class Profile:
     lights: tuple[dict, ...] = ()
     level2: dict | None = None
     lut3d: dict | None = None
+    runtime: dict | None = None
     created: str = ""
     software: str = f"vr-colour-workbench {__version__}"
 
@@ -137,12 +286,16 @@ class Profile:
             document["level2"] = self.level2
         if self.lut3d is not None:
             document["lut3d"] = self.lut3d
+        if self.runtime is not None:
+            document["runtime"] = self.runtime
         return document
 
     @classmethod
     def from_document(cls, document: dict, source: str = "profile") -> "Profile":
+        """Validate ``document`` fully (schema, then the model rebuilt and probed) and wrap it."""
         validate_profile_document(document, source)
         model = document["display_model"]
+        check_display_parameters(model["type"], model["parameters"], source)
         return cls(
             device=document["device"], display_model_type=model["type"],
             display_parameters=model["parameters"], white_XYZ=tuple(model["white_XYZ"]),
@@ -150,7 +303,8 @@ class Profile:
             instrument=document.get("instrument"), validation=document.get("validation"),
             diagnosis=document.get("diagnosis"), engine=document["engine"],
             lights=tuple(document["lights"]), level2=document.get("level2"),
-            lut3d=document.get("lut3d"), created=document.get("created", ""),
+            lut3d=document.get("lut3d"), runtime=document.get("runtime"),
+            created=document.get("created", ""),
             software=document["software"])
 
 
@@ -178,32 +332,30 @@ def load_profile(path) -> Profile:
     """Read and validate a profile; errors name the file and the fix."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        size = path.stat().st_size
+        if size > MAX_PROFILE_BYTES:
+            raise ProfileError(f"{path}: {size} bytes is more than a profile holds (at most "
+                               f"{MAX_PROFILE_BYTES}); is this the right file?")
+        data = path.read_bytes()
     except FileNotFoundError:
         raise ProfileError(f"{path}: no such profile. Export one with 'python -m workbench "
                            "diagnose SESSION --export PROFILE' or use profiles/"
                            "htc-vive-paper.vrprofile.json") from None
+    except IsADirectoryError:
+        raise ProfileError(f"{path}: is a directory; give the .vrprofile.json file") from None
     try:
-        document = json.loads(text)
-    except json.JSONDecodeError as error:
-        raise ProfileError(f"{path}, line {error.lineno}: not valid JSON ({error.msg}). "
-                           "Export the profile again") from None
-    if not isinstance(document, dict):
-        raise ProfileError(f"{path}: a profile is a JSON object, not {type(document).__name__}")
-    profile = Profile.from_document(document, str(path))
-    try:
-        profile.display_model()
-    except (KeyError, TypeError, ValueError) as error:
-        raise ProfileError(f"{path}: display_model parameters are unusable ({error}). "
-                           "Export the profile again") from None
-    return profile
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ProfileError(f"{path}: not UTF-8 text (byte {error.start}); a profile is JSON"
+                           ) from None
+    return parse_profile_text(text, str(path))
 
 
 def save_profile(profile: Profile, path) -> Path:
     """Validate and write ``profile`` atomically (temporary file, fsync, rename)."""
     path = Path(path)
     document = profile.to_document()
-    validate_profile_document(document, str(path))
+    Profile.from_document(document, str(path))
     with atomic_writer(path) as handle:
         json.dump(document, handle, indent=1)
         handle.write("\n")
