@@ -32,6 +32,29 @@ meaning, realistic range and default:
 ``temporal-drift``
     Warm-up: the whole output is multiplied by ``1 − magnitude · exp(−t/τ)``
     with ``τ = WARMUP_TAU_FRACTION × session_length_s``.
+``apl-dependence``
+    Automatic brightness limiting: the output is scaled by a function of the
+    frame's load ``L = Σ_c p_c (w·lin_c(patch) + (1 − w)·lin_c(surround))``
+    (``w`` the patch window's fraction of the field, ``lin_c`` the channel's
+    tone curve, ``p_c`` the channel's share of the panel's drive current at
+    full white, from the channel luminances and
+    :data:`OLED_CURRENT_EFFICIENCY_CD_PER_A`): 1 up to the knee
+    :data:`APL_KNEE_LOAD`, then ``(knee / L)^a`` with ``a`` solved so that a
+    full-field white loses ``magnitude``. The limiter follows a change of
+    frame with the time constant :data:`APL_TIME_CONSTANT_S`; the instrument
+    reads at least :data:`APL_READ_DELAY_S` after the frame changed. Unlike
+    ``channel-interaction`` (which depends on the patch's own drive), it
+    depends on the whole frame, so it shows only when patches are measured
+    as windows or on surrounds.
+
+    Grounding (``../shared/data/real/oled-apl/``): a Dell AW3225QF QD-OLED
+    (Desktop preset) holds its white up to a 10 % window, shows 85 % of it in
+    a 20 % window and 56 % full field (loss 0.44; 0.76 in its HDR peak
+    preset); a Samsung OLED's white target loses 21 % as the surround goes
+    from 0 to 0.9 and 32 % with a large white square beside it too. Held on
+    screen, the AW3225QF's full white stays within 1 % from its first
+    reading, 6 s after onset, to 70 s: the limiter settles well within a
+    second, as OLED limiters that act within a few frames do.
 
 Units: wavelengths in nm (380–780, 1 nm); spectral radiance in
 W·sr⁻¹·m⁻²·nm⁻¹; luminance in cd/m² (``K_m = 683 lm/W`` times the integral
@@ -65,6 +88,10 @@ __all__ = [
     "HEADSET_EFFECTS",
     "HeadsetError",
     "WARMUP_TAU_FRACTION",
+    "APL_KNEE_LOAD",
+    "APL_TIME_CONSTANT_S",
+    "APL_READ_DELAY_S",
+    "OLED_CURRENT_EFFICIENCY_CD_PER_A",
     "PrimaryShape",
     "parse_effect",
     "radiance_to_XYZ",
@@ -86,6 +113,20 @@ _SHOULDER_WIDTH_FACTOR = 1.2  # the 0-1 band is a little broader than the 0-0 ba
 
 WARMUP_TAU_FRACTION = 0.25
 """Warm-up time constant of ``temporal-drift`` as a fraction of the session length."""
+
+APL_KNEE_LOAD = 0.15
+"""Frame load (full-field white = 1) up to which ``apl-dependence`` leaves the output alone."""
+
+APL_TIME_CONSTANT_S = 0.2
+"""Time constant (s) with which the ``apl-dependence`` limiter follows a change of frame."""
+
+APL_READ_DELAY_S = 1.0
+"""Seconds between a frame change and the instrument's reading at the earliest (the
+CS-2000's shortest pre-measurement)."""
+
+OLED_CURRENT_EFFICIENCY_CD_PER_A = {"r": 30.0, "g": 80.0, "b": 8.0}
+"""Typical current efficiencies of red and green phosphorescent and blue fluorescent
+OLED emitters (cd/A); they weight each channel's share of the panel's load."""
 
 
 @dataclass(frozen=True)
@@ -232,6 +273,13 @@ HEADSET_EFFECTS = {
             f"warm-up: output × (1 − m·exp(−t/τ)), τ = {WARMUP_TAU_FRACTION} × the session length",
             "fractional output deficit at the start of the session",
             (0.03, 0.08), 0.05, (0.0, 1.0),
+        ),
+        HeadsetEffectSpec(
+            "apl-dependence",
+            f"automatic brightness limiting: output × 1 up to a frame load of {APL_KNEE_LOAD}, then a "
+            f"power law of the load, settling with τ = {APL_TIME_CONSTANT_S} s",
+            "fractional luminance loss of a full-field white against a white window below the knee",
+            (0.15, 0.45), 0.25, (0.0, 1.0),
         ),
     )
 }
@@ -448,7 +496,11 @@ class SimulatedHeadset:
             clock = lambda: time.monotonic() - start  # noqa: E731
         self._clock = clock
         self._shown = np.zeros(_N_CHANNELS)
+        self._shown_window = 1.0
+        self._shown_surround = np.zeros(_N_CHANNELS)
         self._build_spectra()
+        self._apl_from = 1.0  # limiter gain when the frame last changed
+        self._apl_changed_at = -math.inf
 
     # -- construction -------------------------------------------------------------------
 
@@ -478,6 +530,10 @@ class SimulatedHeadset:
             )
         self._unit_black = black_weights @ unit
         self._shift_beta0 = self._solve_shift_beta0(self.effects.get("chromaticity-shift", 0.0))
+        current = self.channel_luminances / np.array([OLED_CURRENT_EFFICIENCY_CD_PER_A[c] for c in _CHANNELS])
+        self.apl_power_shares = current / current.sum()
+        loss = self.effects.get("apl-dependence", 0.0)
+        self._apl_exponent = math.log(1.0 - loss) / math.log(APL_KNEE_LOAD) if loss > 0 else 0.0
 
     def _solve_shift_beta0(self, distance: float) -> np.ndarray:
         """Per-channel white fraction at drive 0 that moves xy by ``distance``."""
@@ -502,7 +558,8 @@ class SimulatedHeadset:
 
     # -- the light ----------------------------------------------------------------------
 
-    def radiance(self, rgb_dac, t_s: float = 0.0) -> np.ndarray:
+    def radiance(self, rgb_dac, t_s: float = 0.0, *, window=1.0, surround=None,
+                 apl_gain=None) -> np.ndarray:
         """Spectral radiance emitted for DAC values ``rgb_dac`` at session time ``t_s``.
 
         Parameters
@@ -511,6 +568,13 @@ class SimulatedHeadset:
             DAC values, 0..255 (floats allowed).
         t_s : float
             Session time in seconds (only ``temporal-drift`` depends on it).
+        window : float or array_like, shape (N,)
+            The patch's fraction of the field, 0 < window <= 1 (1: full field).
+        surround : array_like, shape (3,) or (N, 3), optional
+            DAC values of the rest of the field; black by default.
+        apl_gain : float, optional
+            The ``apl-dependence`` limiter's gain; by default its settled
+            value for this frame (see :meth:`apl_gain`).
 
         Returns
         -------
@@ -526,11 +590,13 @@ class SimulatedHeadset:
             raise ValueError(f"t_s {t_s!r} is not finite; give the session time in seconds")
         drive = np.atleast_2d(rgb) / 255.0
         linear = self._tone_curve(drive)
+        if apl_gain is None:
+            apl_gain = self.apl_gain(self.frame_load(rgb, window, surround))
         luminance = linear * self.channel_luminances  # (N, 3) cd/m² per channel
         beta = self._shift_beta0 * (1.0 - drive) ** 2
         spectra = (luminance * (1.0 - beta)) @ self._unit_primaries
         spectra += (luminance * beta).sum(axis=1, keepdims=True) * self._unit_white
-        spectra *= self._power_limit(linear)[:, None]
+        spectra *= (self._power_limit(linear) * np.reshape(apl_gain, -1))[:, None]
         spectra += self.effects.get("black-offset", 0.0) * self.white_luminance * self._unit_black
         spectra *= self._warmup(t_s)
         return spectra[0] if rgb.ndim == 1 else spectra
@@ -545,6 +611,38 @@ class SimulatedHeadset:
         single_channel_load = 1.0 / _N_CHANNELS
         excess = np.clip((linear.mean(axis=1) - single_channel_load) / (1.0 - single_channel_load), 0.0, 1.0)
         return 1.0 - loss * excess
+
+    def frame_load(self, rgb_dac, window=1.0, surround=None) -> np.ndarray:
+        """Load of frames showing ``rgb_dac`` as a ``window`` on ``surround`` (full-field white = 1).
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            ``Σ_c p_c (w·lin_c(patch) + (1 − w)·lin_c(surround))``, ``p_c`` =
+            :attr:`apl_power_shares`.
+        """
+        rgb = np.atleast_2d(np.asarray(rgb_dac, dtype=float))
+        window = np.broadcast_to(np.asarray(window, dtype=float), (len(rgb),))
+        if not np.all((window > 0) & (window <= 1)):
+            raise ValueError(f"window {window.tolist()} is outside (0, 1]; give the patch's fraction of the field")
+        surround = np.zeros_like(rgb) if surround is None else np.atleast_2d(np.asarray(surround, dtype=float))
+        if surround.shape[-1] != _N_CHANNELS or np.any((surround < 0) | (surround > 255)) \
+                or not np.all(np.isfinite(surround)):
+            raise ValueError(f"surround {surround.tolist()} is not DAC values 0..255; give 3 per patch")
+        w = window[:, None]
+        linear = w * self._tone_curve(rgb / 255.0) + (1.0 - w) * self._tone_curve(surround / 255.0)
+        return linear @ self.apl_power_shares
+
+    def apl_gain(self, load) -> np.ndarray:
+        """Settled gain of the ``apl-dependence`` limiter at frame ``load`` (1 without the effect)."""
+        load = np.asarray(load, dtype=float)
+        return np.where(load > APL_KNEE_LOAD,
+                        (APL_KNEE_LOAD / np.maximum(load, APL_KNEE_LOAD)) ** self._apl_exponent, 1.0)
+
+    def _apl_gain_now(self, t_s: float) -> float:
+        target = float(self.apl_gain(self.frame_load(self._shown, self._shown_window, self._shown_surround))[0])
+        elapsed = max(t_s - self._apl_changed_at, APL_READ_DELAY_S)
+        return target + (self._apl_from - target) * math.exp(-elapsed / APL_TIME_CONSTANT_S)
 
     def _warmup(self, t_s: float) -> float:
         deficit = self.effects.get("temporal-drift", 0.0)
@@ -570,22 +668,51 @@ class SimulatedHeadset:
 
     # -- what is on screen --------------------------------------------------------------
 
-    def show(self, rgb_dac) -> None:
-        """Put a full-field patch of DAC values ``rgb_dac`` (3,) on the screen."""
+    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
+        """Put a patch of DAC values ``rgb_dac`` (3,) on the screen.
+
+        Parameters
+        ----------
+        rgb_dac : array_like, shape (3,)
+        window : float
+            The patch's fraction of the field (1: full field).
+        surround : array_like, shape (3,)
+            DAC values of the rest of the field.
+        """
         rgb = np.asarray(rgb_dac, dtype=float)
         if rgb.shape != (_N_CHANNELS,):
             raise ValueError(f"show() takes one patch of 3 DAC values, got shape {rgb.shape}")
-        self.radiance(rgb)  # validates the values
+        surround = np.asarray(surround, dtype=float)
+        if surround.shape != (_N_CHANNELS,):
+            raise ValueError(f"show() takes a surround of 3 DAC values, got shape {surround.shape}")
+        self.radiance(rgb, window=window, surround=surround)  # validates the values
+        now = self._clock()
+        self._apl_from = self._apl_gain_now(now)
+        self._apl_changed_at = now
         self._shown = rgb.copy()
+        self._shown_window = float(window)
+        self._shown_surround = surround.copy()
 
     @property
     def shown(self) -> np.ndarray:
         """DAC values of the patch on screen now (black until :meth:`show` is called)."""
         return self._shown.copy()
 
+    @property
+    def shown_window(self) -> float:
+        """Fraction of the field the patch on screen covers."""
+        return self._shown_window
+
+    @property
+    def shown_surround(self) -> np.ndarray:
+        """DAC values of the surround on screen now."""
+        return self._shown_surround.copy()
+
     def current_radiance(self) -> np.ndarray:
         """Spectral radiance (401,) of the patch on screen, at the session clock's time."""
-        return self.radiance(self._shown, self._clock())
+        t_s = self._clock()
+        return self.radiance(self._shown, t_s, window=self._shown_window, surround=self._shown_surround,
+                             apl_gain=self._apl_gain_now(t_s))
 
     def describe(self) -> str:
         """One line naming the headset and its effects, for journals and logs."""
