@@ -206,6 +206,9 @@ SESSION_READERS = {
 def read_session(path: str | os.PathLike) -> Session:
     """Read a session from a CSV, an Argyll ``.ti3``, a Psychtoolbox ``.mat`` or a directory."""
     path = Path(path)
+    from workbench.apl.readers import apl_session_reader  # OLED APL data sets (Samsung .mat, AW3225QF)
+    if (apl_reader := apl_session_reader(path)) is not None:
+        return apl_reader(path)
     if path.is_dir():
         return _read_directory(path)
     reader = SESSION_READERS.get(path.suffix.lower())
