@@ -10,9 +10,8 @@ Reading is strict, in this order (:func:`load_profile`): the file's size
 (at most :data:`MAX_PROFILE_BYTES`), JSON without ``NaN``/``Infinity``, the
 format name and major version (a newer one is refused, naming the version
 this workbench supports), the JSON Schema ``profiles/vrprofile.schema.json``
-(every model's parameters: shapes, types, ranges), the extended model's
-component names against the diagnostics' terms, and finally the display
-model rebuilt and probed (forward and inverse give finite values). Every
+(every model's parameters: shapes, types, ranges, the extended model's
+component names), and finally the display model rebuilt and probed (forward and inverse give finite values). Every
 failure is a :class:`ProfileError` naming the file, the place in it and the
 fix; nothing from a file is ever executed. :func:`save_profile` validates the
 same way and writes atomically.
@@ -154,15 +153,6 @@ def validate_profile_document(document: dict, source: str = "profile") -> None:
         raise ProfileError(f"{source}: {_where(error.absolute_path)}: {message}. {_FIX}")
 
 
-def _extended_components(parameters: dict, source: str) -> None:
-    from workbench.diagnostics.extension import TERMS
-
-    for index, name in enumerate(parameters.get("components", ())):
-        if name not in TERMS:
-            raise ProfileError(f"{source}: display_model/parameters/components/{index}: unknown "
-                               f"component {name!r}; known: {sorted(TERMS)}. {_FIX}")
-
-
 _PROBE_DAC = np.array([[0, 0, 0], [255, 255, 255], [255, 0, 0], [0, 255, 0], [0, 0, 255],
                        [128, 64, 32], [16, 200, 90]], dtype=float)
 
@@ -172,16 +162,11 @@ def check_display_parameters(model_type: str, parameters: dict, source: str = "p
     """Rebuild the display model of a schema-valid profile and probe it; :class:`ProfileError` if unusable.
 
     The model must build (its constructor's own checks: e.g. a singular
-    primaries matrix, a non-monotone tone curve), the extended model's
-    components must be known terms, and forward and inverse must give finite
-    values on a few probe colours.
+    primaries matrix, a non-monotone tone curve) and forward and inverse must
+    give finite values on a few probe colours. (The extended model's component
+    names are checked by the schema, whose list follows
+    :data:`workbench.diagnostics.extension.TERMS`.)
     """
-    nested = [(model_type, parameters)]
-    if model_type == "lut3d-residual":
-        nested.append((parameters.get("base_type"), parameters.get("base", {})))
-    for kind, values in nested:
-        if kind == "extended":
-            _extended_components(values, source)
     try:
         with np.errstate(all="ignore"):
             model = display_model_from_parameters(model_type, parameters)

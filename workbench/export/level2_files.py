@@ -1,0 +1,280 @@
+"""Level-2 files of a runtime bundle: basis coefficients, basis, per-light matrices and tables.
+
+For a reflectance cube the bundle holds (in ``level2/<name>/``):
+
+- ``coefficients.bin`` + ``coefficients.json``: the float16 coefficient
+  *channels* as ``ceil(C/4)`` RGBA half-float texture layers, raw
+  little-endian, layer by layer, rows top first, texels left to right, 4
+  channels (channel ``4·layer + i``; padding channels 0). Channels 0..K−1 are
+  the K basis coefficients rounded to float16; channels K..K+S−1 hold the
+  float16 rounding error of the first S coefficients (a *precision split*:
+  ``c ≈ hi + lo``, 22 significant bits where float16 alone keeps 11, which is
+  what limits texel-exact agreement), so ``C = K + S``. The runtime needs no
+  special case: a split channel's matrix row repeats its coefficient's row;
+- ``basis.json``: wavelengths, mean and vectors (``ρ ≈ mean + c · vectors``),
+  how K was chosen and the figures it was chosen on;
+- ``lights.json``: per light the ``3 × C`` matrix and offset
+  ``drive = matrix · channels + offset`` (source × colour-matching functions × basis,
+  with the display inverse's linear part folded in), the light colour the
+  texels assume, the level-2 texel table (3 × 256: texel for each integer
+  ``DAC_t`` per channel, design §2) and the unreachable levels;
+- ``preview.png``: the cube's authored sRGB under D65 (what it looks like).
+
+The runtime then does per texel: ``drive`` → the bundle's display inverse
+(:mod:`workbench.export.runtime_inverse`) → integer ``DAC_t`` → texel table.
+
+K and S are chosen per cube (:func:`choose_cube_basis`, fewest channels C
+first) so that this runtime arithmetic gives **the same 8-bit texel** as the
+full-band level-2 path (:func:`workbench.hyperspectral.relight_level2_full_band`)
+on at least ``target_share`` of held-out texels (texels the basis was not
+fitted on), under every light of the bundle.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+
+import numpy as np
+
+from workbench.display import DisplayModel
+from workbench.errors import InputError
+from workbench.export.runtime_inverse import RuntimeDisplayInverse
+from workbench.fileio import atomic_writer
+from workbench.hyperspectral import (
+    ReflectanceCube,
+    authored_srgb8_cube,
+    fit_cube_basis,
+    plan_relight,
+    relight_level2_full_band,
+    write_png_rgb8,
+)
+from workbench.hyperspectral.basis import MAX_COMPONENTS, SpectralBasis, split_held_out
+from workbench.hyperspectral.resampling import XYZ_band_weights
+
+__all__ = [
+    "COEFFICIENTS_FORMAT",
+    "DEFAULT_IDENTICAL_SHARE",
+    "ComponentChoice",
+    "Level2Light",
+    "MAX_SPLIT",
+    "level2_light",
+    "encode_channels",
+    "runtime_level2_texels",
+    "choose_cube_basis",
+    "write_level2_cube",
+]
+
+COEFFICIENTS_FORMAT = "vr-colour-workbench-level2-coefficients"
+
+DEFAULT_IDENTICAL_SHARE = 0.995
+"""Share of held-out texels whose runtime texel must equal the full-band one (under every
+light) when K is chosen: a margin over the 99 % promised on materials the basis never saw."""
+
+MAX_SPLIT = 6
+"""Most coefficients given a second (precision) channel."""
+
+_HELD_OUT_TEXELS = 8192
+
+
+def encode_channels(cube: ReflectanceCube, basis: SpectralBasis, split: int) -> np.ndarray:
+    """float16 channels ``(K + split, H, W)``: the coefficients, then the float16 rounding
+    error of the first ``split`` of them (module doc)."""
+    if not 0 <= split <= basis.components:
+        raise InputError(f"split={split}: between 0 and K={basis.components} coefficients")
+    exact = np.moveaxis(cube.data @ basis.projection.astype(np.float32)
+                        - (basis.mean @ basis.projection).astype(np.float32), -1, 0)
+    high = exact.astype(np.float16)
+    low = (exact[:split] - high[:split].astype(np.float32)).astype(np.float16)
+    return np.concatenate([high, low], axis=0)
+
+
+@dataclass(frozen=True, eq=False)
+class Level2Light:
+    """What the runtime needs for one light and one cube's basis.
+
+    Attributes
+    ----------
+    id : str
+    drive_matrix : ndarray (C, 3), float32
+        ``drive = channels @ drive_matrix + drive_offset``.
+    drive_offset : ndarray (3,), float32
+    light_rgb8 : ndarray (3,) of int
+        The engine light colour the texels assume.
+    texel_table : ndarray (3, 256), uint8
+    unreachable_dac : ndarray (3,), int
+    """
+
+    id: str
+    drive_matrix: np.ndarray
+    drive_offset: np.ndarray
+    light_rgb8: np.ndarray
+    texel_table: np.ndarray
+    unreachable_dac: np.ndarray
+
+    def to_json(self) -> dict:
+        return {"id": self.id,
+                "matrix": self.drive_matrix.T.astype(float).tolist(),
+                "offset": self.drive_offset.astype(float).tolist(),
+                "light_rgb8": [int(v) for v in self.light_rgb8],
+                "texel_table": self.texel_table.astype(int).tolist(),
+                "unreachable_dac": [int(v) for v in self.unreachable_dac]}
+
+
+def level2_light(basis: SpectralBasis, illuminant, display: DisplayModel,
+                 inverse: RuntimeDisplayInverse, *, k: float, split: int = 0) -> Level2Light:
+    """The per-light record: the basis relighting matrix folded with the inverse's linear part,
+    one row per channel (a split channel repeats its coefficient's row)."""
+    plan = plan_relight(basis, illuminant, display, k=k)
+    rows = list(range(basis.components)) + list(range(split))
+    matrix = (plan.XYZ_matrix[rows] @ inverse.XYZ_to_drive).astype(np.float32)
+    offset = (plan.XYZ_offset @ inverse.XYZ_to_drive + inverse.drive_offset).astype(np.float32)
+    return Level2Light(id=plan.source, drive_matrix=matrix, drive_offset=offset,
+                       light_rgb8=plan.light.rgb8, texel_table=plan.texel_table,
+                       unreachable_dac=plan.unreachable_dac)
+
+
+def runtime_level2_texels(planes: np.ndarray, light: Level2Light,
+                          inverse: RuntimeDisplayInverse) -> tuple[np.ndarray, int]:
+    """The runtime's level-2 texels ``(N, 3)`` uint8 from float16 planes ``(K, N)`` and the
+    number of texels the light cannot carry (float32 throughout, as a shader)."""
+    coefficients = np.asarray(planes, dtype=np.float16).astype(np.float32)
+    drive = coefficients.T @ light.drive_matrix + light.drive_offset
+    dac = inverse.dac_from_affine_drive(drive)
+    texels = light.texel_table[np.arange(3), dac]
+    unreachable = int(np.count_nonzero(np.any(dac >= light.unreachable_dac, axis=-1)))
+    return texels.astype(np.uint8), unreachable
+
+
+@dataclass(frozen=True)
+class ComponentChoice:
+    """How K and S were chosen for a cube: the share of held-out texels identical to the full band.
+
+    ``identical`` maps light id → share (0..1) at the chosen (K, S); ``tried``
+    maps each ``"K+S"`` tried → the smallest share over the lights.
+    """
+
+    components: int
+    split: int
+    identical: MappingProxyType
+    tried: MappingProxyType
+    target_share: float
+    held_out_texels: int
+
+    @property
+    def meets_target(self) -> bool:
+        return min(self.identical.values()) >= self.target_share
+
+    def to_json(self) -> dict:
+        return {"K": self.components, "split": self.split,
+                "channels": self.components + self.split, "target_identical_share": self.target_share,
+                "held_out_texels": self.held_out_texels,
+                "identical_share": {key: round(v, 5) for key, v in self.identical.items()},
+                "tried": {key: round(v, 5) for key, v in self.tried.items()},
+                "meets_target": self.meets_target,
+                "criterion": "runtime 8-bit texel equal to the full-band level-2 texel, on texels "
+                             "the basis was not fitted on, under every light of the bundle"}
+
+
+def choose_cube_basis(cube: ReflectanceCube, display: DisplayModel, illuminants: Sequence,
+                      inverse: RuntimeDisplayInverse, *, k: float, observer: str,
+                      target_share: float = DEFAULT_IDENTICAL_SHARE,
+                      max_components: int = MAX_COMPONENTS, seed: int = 0
+                      ) -> tuple[SpectralBasis, ComponentChoice]:
+    """The fewest channels ``K + S`` whose runtime texels equal the full band's on
+    ≥ ``target_share`` of held-out texels under every light (module doc); the most
+    accurate ``(K, S)`` tried otherwise (:attr:`ComponentChoice.meets_target` False)."""
+    if not illuminants:
+        raise InputError("choosing K needs at least one light (--lights)")
+    texels = cube.texels()
+    _, held_index = split_held_out(len(texels), seed=seed)   # the texels fit_cube_basis leaves out
+    held = texels[held_index[:_HELD_OUT_TEXELS]]
+    held_cube = ReflectanceCube(held.reshape(1, -1, cube.bands), cube.wavelengths,
+                                f"held-out texels of {cube.source}")
+    reference = {}
+    for illuminant in illuminants:
+        weights = XYZ_band_weights(illuminant.sd, cube.wavelengths, observer, k=k,
+                                   Y_white=float(display.white_XYZ[1]))
+        reference[illuminant.id] = relight_level2_full_band(
+            held_cube, illuminant, display, k=k, observer=observer, weights=weights
+        ).texels.reshape(-1, 3)
+    start = fit_cube_basis(cube, observer=observer, k=k, seed=seed).components
+    tried, best, chosen = {}, None, None
+    for K in range(start, max_components + 1):
+        if chosen is not None and K >= chosen[0].components + chosen[1]:
+            break  # no split can give fewer channels than the choice
+        try:
+            basis = fit_cube_basis(cube, components=K, observer=observer, k=k, seed=seed)
+        except InputError:
+            break  # the cube has fewer independent components
+        all_channels = encode_channels(held_cube, basis, min(MAX_SPLIT, K)).reshape(-1, len(held))
+        for split in range(0, min(MAX_SPLIT, K) + 1):
+            planes = np.concatenate([all_channels[:K], all_channels[K:K + split]])
+            shares = {}
+            for illuminant in illuminants:
+                light = level2_light(basis, illuminant, display, inverse, k=k, split=split)
+                runtime, _ = runtime_level2_texels(planes, light, inverse)
+                shares[illuminant.id] = float(np.mean(np.all(
+                    runtime == reference[illuminant.id], axis=-1)))
+            tried[f"{K}+{split}"] = min(shares.values())
+            if best is None or min(shares.values()) > min(best[2].values()):
+                best = (basis, split, shares)
+            if min(shares.values()) >= target_share:
+                if chosen is None or K + split < chosen[0].components + chosen[1]:
+                    chosen = (basis, split, shares)
+                break
+    basis, split, shares = chosen or best
+    return basis, ComponentChoice(basis.components, split, MappingProxyType(shares),
+                                  MappingProxyType(tried), target_share, len(held))
+
+
+def _write_json(path: Path, document: dict) -> None:
+    with atomic_writer(path) as handle:
+        json.dump(document, handle, indent=1)
+        handle.write("\n")
+
+
+def write_level2_cube(directory, name: str, cube: ReflectanceCube, basis: SpectralBasis,
+                      split: int, lights: Sequence[Level2Light],
+                      choice: ComponentChoice | None) -> dict:
+    """Write one cube's level-2 files (module doc) into ``directory/level2/name``; the
+    bundle manifest's entry for it."""
+    folder = Path(directory) / "level2" / name
+    folder.mkdir(parents=True, exist_ok=True)
+    K = basis.components
+    channels = K + split
+    layers = -(-channels // 4)
+    padded = np.zeros((layers * 4, cube.height, cube.width), dtype="<f2")
+    padded[:channels] = encode_channels(cube, basis, split)
+    rgba = np.ascontiguousarray(padded.reshape(layers, 4, cube.height, cube.width)
+                                .transpose(0, 2, 3, 1))                 # (layers, H, W, 4)
+    with atomic_writer(folder / "coefficients.bin", "wb") as handle:
+        handle.write(rgba.tobytes())
+    header = {"format": COEFFICIENTS_FORMAT, "format_version": 1, "file": "coefficients.bin",
+              "width": cube.width, "height": cube.height, "components": K, "split": split,
+              "channels": channels, "layers": layers,
+              "channel_component": list(range(K)) + list(range(split)),
+              "texture_format": "RGBA16F (Unity TextureFormat.RGBAHalf)",
+              "dtype": "float16 little-endian", "bytes": int(rgba.nbytes),
+              "layout": "[layer][row, top row first][column][RGBA]; channel i is layer i//4, "
+                        "component i%4; channel_component[i] is the basis coefficient it holds "
+                        "(channels K.. hold the float16 rounding error of the first coefficients); "
+                        "padding channels are 0"}
+    _write_json(folder / "coefficients.json", header)
+    _write_json(folder / "basis.json", {
+        "wavelengths": basis.wavelengths.tolist(), "mean": basis.mean.tolist(),
+        "vectors": basis.vectors.tolist(), "observer": basis.observer,
+        "sources": list(basis.sources), "components": K,
+        "held_out_max_dE00": dict(basis.held_out.max_dE00),
+        "choice": None if choice is None else choice.to_json(),
+        "cube": cube.source})
+    _write_json(folder / "lights.json", {"components": K, "channels": channels, "layers": layers,
+                                         "lights": [light.to_json() for light in lights]})
+    write_png_rgb8(folder / "preview.png", authored_srgb8_cube(cube),
+                   {"Description": f"authored sRGB under D65 of {cube.source}"})
+    return {"name": name, "folder": f"level2/{name}", "width": cube.width, "height": cube.height,
+            "components": K, "split": split, "channels": channels, "layers": layers, "source": cube.source,
+            "choice": None if choice is None else choice.to_json()}
