@@ -1,0 +1,302 @@
+"""Scene page: the virtual lightbooth at level 1 and level 2 side by side, with the per-patch error table.
+
+One pyvistaqt ``QtInteractor`` holds two renderers (level 1 left, level 2
+right, cameras linked) built once by :func:`workbench.scene.booth.build_booth`;
+switching the source or the profile computes the new images
+(:func:`workbench.scene.level_images`, a few ms) and writes them into the
+existing textures (:func:`workbench.scene.booth.relight_booth`). Anti-aliasing
+is off on purpose: on Mesa llvmpipe 8× MSAA costs 50–90 ms a frame, and the
+flat textured patches gain nothing from it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QPoint, Qt, Signal
+from PySide6.QtGui import QColor, QImage, QPainter
+from PySide6.QtWidgets import (
+    QComboBox,
+    QHBoxLayout,
+    QHeaderView,
+    QLabel,
+    QSplitter,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
+)
+
+from workbench.illuminants.user_library import resolve_illuminant
+from workbench.scene import LEVELS, level_images, patch_errors
+from workbench.scene.booth import board_patch_world_point, booth_camera, build_booth, relight_booth
+
+__all__ = ["ScenePage"]
+
+_ROWS = ("Level 2 shows", "Level 1 ΔE00", "Level 2 ΔE00", "L1 |ΔR ΔG ΔB|", "L2 |ΔR ΔG ΔB|",
+         "DAC_t (R G B)")
+"""Rows of the error table; its columns are the 24 patches."""
+
+
+def _triplet(values) -> str:
+    return " ".join(f"{int(v):d}" for v in values)
+
+
+class ScenePage(QWidget):
+    """The lightbooth at both levels under one source, and the paper's Table 4 per patch."""
+
+    title = "Scene"
+
+    source_changed = Signal(str)
+    """Emitted after both views show a new source (its id)."""
+
+    def __init__(self, workspace, parent=None):
+        super().__init__(parent)
+        from pyvistaqt import QtInteractor
+
+        self.workspace = workspace
+        self._source_id = workspace.selected_sources[0]
+        self._images: dict[int, object] = {}
+        self._errors = None
+
+        self.source_box = QComboBox()
+        self.source_box.setToolTip("The light source both views are lit by")
+        self.source_box.setMinimumContentsLength(18)
+        self.caption = QLabel()
+        self.caption.setWordWrap(True)
+
+        # multi_samples=1 and no FXAA: anti-aliasing off on purpose (module doc).
+        self.plotter = QtInteractor(self, shape=(1, 2), multi_samples=1, auto_update=False,
+                                    border=False)
+        self.plotter.disable_anti_aliasing(all_renderers=True)
+        self.plotter.setMinimumSize(640, 320)
+        self._handles = {}
+        display = workspace.profile.display_model()
+        illuminant = resolve_illuminant(self._source_id)
+        for column, level in enumerate(LEVELS):
+            self.plotter.subplot(0, column)
+            self._images[level] = level_images(illuminant, display, level, k=workspace.profile.k)
+            self._handles[level] = build_booth(self.plotter, self._images[level])
+            self.plotter.add_text(f"Level {level}", position="upper_left", font_size=11,
+                                  color="white")
+        self.plotter.link_views()
+
+        self.table = QTableWidget(len(_ROWS), 24)
+        self.table.setVerticalHeaderLabels(_ROWS)
+        self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        self.table.setSortingEnabled(False)
+        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Stretch)
+        self.table.horizontalHeader().setMinimumSectionSize(44)
+        self.table.verticalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+        self.table.setVerticalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        font = self.table.font()
+        font.setPointSizeF(font.pointSizeF() * 0.9)
+        self.table.setFont(font)
+        self.summary = QLabel()
+        self.summary.setWordWrap(True)
+        self.summary.setTextFormat(Qt.TextFormat.RichText)
+
+        top = QHBoxLayout()
+        top.addWidget(QLabel("Light source:"))
+        top.addWidget(self.source_box)
+        top.addWidget(self.caption, 1)
+        bottom = QWidget()
+        bottom_layout = QVBoxLayout(bottom)
+        bottom_layout.setContentsMargins(0, 0, 0, 0)
+        table_title = QLabel("<b>Per-patch errors on the ColorChecker</b> (the paper's Table 4, "
+                             "patch by patch; columns are patches 1–24, hover for the name): "
+                             "engine DAC vs the theoretical DAC_t in counts, and CIEDE2000 of what "
+                             "the headset shows vs the colour under the source")
+        table_title.setWordWrap(True)
+        bottom_layout.addWidget(table_title)
+        bottom_layout.addWidget(self.table, 1)
+        bottom_layout.addWidget(self.summary)
+        splitter = QSplitter(Qt.Orientation.Vertical)
+        splitter.addWidget(self.plotter)
+        splitter.addWidget(bottom)
+        splitter.setStretchFactor(0, 1)
+        splitter.setStretchFactor(1, 0)
+        splitter.setCollapsible(0, False)
+        self.splitter = splitter
+        layout = QVBoxLayout(self)
+        layout.addLayout(top)
+        layout.addWidget(splitter, 1)
+
+        self._refill_sources()
+        self._update_errors()
+        self._update_caption()
+        self.source_box.currentIndexChanged.connect(self._on_box)
+        self._unsubscribe = [
+            workspace.subscribe("sources-changed", lambda ws: self._refill_sources()),
+            workspace.subscribe("profile-changed", lambda ws: self._relight()),
+        ]
+
+    # -- public ---------------------------------------------------------------
+    @property
+    def source_id(self) -> str:
+        """The source both views show."""
+        return self._source_id
+
+    def select_source(self, source_id: str) -> None:
+        """Re-light both views with ``source_id``; returns after both have rendered."""
+        source_id = str(source_id)
+        if self.source_box.findData(source_id) < 0:
+            self.source_box.blockSignals(True)
+            self.source_box.addItem(source_id, source_id)
+            self.source_box.blockSignals(False)
+        self._source_id = source_id
+        self.source_box.blockSignals(True)
+        self.source_box.setCurrentIndex(self.source_box.findData(source_id))
+        self.source_box.blockSignals(False)
+        self._relight()
+
+    def level_images(self, level: int):
+        """The :class:`workbench.scene.LevelImages` the view at ``level`` shows now."""
+        return self._images[level]
+
+    def rendered_image(self) -> np.ndarray:
+        """The render window as an (H, W, 3) uint8 array, rows top first (VTK's own read-back)."""
+        from vtkmodules.util.numpy_support import vtk_to_numpy
+        from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+
+        window = self.plotter.ren_win
+        window.Render()
+        grab = vtkWindowToImageFilter()
+        grab.SetInput(window)
+        grab.SetInputBufferTypeToRGB()
+        grab.ReadFrontBufferOff()  # the back buffer just rendered, not what a compositor kept
+        grab.Update()
+        output = grab.GetOutput()
+        width, height, _ = output.GetDimensions()
+        pixels = vtk_to_numpy(output.GetPointData().GetScalars()).reshape(height, width, -1)
+        return np.ascontiguousarray(pixels[::-1, :, :3])
+
+    def patch_screen_point(self, level: int, index: int) -> tuple[int, int]:
+        """(column, row) in :meth:`rendered_image` of ColorChecker patch ``index``'s centre at ``level``."""
+        renderer = self.plotter.renderers[LEVELS.index(level)]
+        renderer.SetWorldPoint(*board_patch_world_point(self._handles[level], index), 1.0)
+        renderer.WorldToDisplay()
+        x, y, _ = renderer.GetDisplayPoint()
+        height = self.plotter.ren_win.GetSize()[1]
+        return int(round(x)), height - 1 - int(round(y))
+
+    def save_screenshot(self, path) -> None:
+        """Write the whole page as PNG, the 3D views from VTK's own read-back."""
+        self.plotter.ren_win.Render()
+        pixmap = self.grab()
+        render = np.ascontiguousarray(self.rendered_image())
+        height, width, _ = render.shape
+        image = QImage(render.data, width, height, 3 * width, QImage.Format.Format_RGB888).copy()
+        painter = QPainter(pixmap)
+        target = self.plotter.mapTo(self, QPoint(0, 0))
+        painter.drawImage(target, image.scaled(self.plotter.size()))
+        painter.end()
+        if not pixmap.save(str(path)):
+            raise OSError(f"could not write {path}")
+
+    # -- internals ------------------------------------------------------------
+    def _refill_sources(self) -> None:
+        ids = list(self.workspace.selected_sources)
+        if self._source_id not in ids:
+            ids.append(self._source_id)
+        self.source_box.blockSignals(True)
+        self.source_box.clear()
+        for source_id in ids:
+            self.source_box.addItem(source_id, source_id)
+        self.source_box.setCurrentIndex(self.source_box.findData(self._source_id))
+        self.source_box.blockSignals(False)
+
+    def _on_box(self, index: int) -> None:
+        source_id = self.source_box.itemData(index)
+        if source_id and source_id != self._source_id:
+            self.select_source(source_id)
+
+    def _relight(self) -> None:
+        profile = self.workspace.profile
+        display = profile.display_model()
+        illuminant = resolve_illuminant(self._source_id)
+        for level in LEVELS:
+            self._images[level] = level_images(illuminant, display, level, k=profile.k)
+            relight_booth(self._handles[level], self._images[level])
+        self.plotter.ren_win.Render()  # synchronous: both renderers of the one window
+        self._update_errors(illuminant)
+        self._update_caption(illuminant)
+        self.source_changed.emit(self._source_id)
+
+    def _update_caption(self, illuminant=None) -> None:
+        illuminant = illuminant or resolve_illuminant(self._source_id)
+        profile = self.workspace.profile
+        device = profile.device.get("name") or profile.device.get("model") or "headset"
+        self.caption.setText(f"{illuminant.name} on {device}: left the level-1 textures, right "
+                             "level 2, as the headset shows them (on this sRGB monitor)")
+
+    def _update_errors(self, illuminant=None) -> None:
+        illuminant = illuminant or resolve_illuminant(self._source_id)
+        profile = self.workspace.profile
+        errors = patch_errors(illuminant, profile.display_model(), k=profile.k)
+        self._errors = errors
+        level1, level2 = errors.level(1), errors.level(2)
+        for column, (a, b) in enumerate(zip(level1, level2)):
+            swatch = self._images[2].patch_rgb8[column]
+            header = QTableWidgetItem(str(a.patch))
+            header.setToolTip(a.name)
+            self.table.setHorizontalHeaderItem(column, header)
+            cells = ("", f"{a.dE00:.1f}", f"{b.dE00:.1f}", _triplet(a.abs_dac), _triplet(b.abs_dac),
+                     _triplet(a.target_dac))
+            for row, text in enumerate(cells):
+                item = QTableWidgetItem(text)
+                item.setTextAlignment(Qt.AlignmentFlag.AlignCenter)
+                item.setToolTip(f"patch {a.patch}: {a.name}")
+                if row == 0:
+                    item.setBackground(QColor(*(int(v) for v in swatch)))
+                self.table.setItem(row, column, item)
+        lines = []
+        for level in LEVELS:
+            s = errors.summary[level]
+            mean = ", ".join(f"{v:.1f}" for v in s.mean_abs)
+            sd = ", ".join(f"{v:.1f}" for v in s.sd)
+            text = (f"<b>Level {level}</b>: mean |ΔR, ΔG, ΔB| = {mean} (sd {sd}) counts; "
+                    f"ΔE00 mean {s.mean_dE00:.2f}, max {s.max_dE00:.2f}")
+            if level in errors.paper:
+                paper_mean, paper_sd = errors.paper[level]
+                text += (f"; paper (ideal sRGB pipeline): {', '.join(f'{v:g}' for v in paper_mean)}"
+                         f" (sd {', '.join(f'{v:g}' for v in paper_sd)})")
+            lines.append(text)
+        lines.append(f"Display model: {errors.display}")
+        self.summary.setText("<br>".join(lines))
+        self.table.resizeRowsToContents()
+        height = (self.table.horizontalHeader().height() + 2 * self.table.frameWidth()
+                  + sum(self.table.rowHeight(r) for r in range(self.table.rowCount())))
+        self.table.setFixedHeight(height + 2)
+
+    def error_summary(self):
+        """The current :class:`workbench.scene.SourceErrors`."""
+        return self._errors
+
+    def _fit_cameras(self) -> None:
+        width, height = self.plotter.ren_win.GetSize()
+        if width <= 0 or height <= 0:
+            return
+        self.plotter.subplot(0, 0)
+        booth_camera(self.plotter, aspect=(width / len(LEVELS)) / height)
+
+    def resizeEvent(self, event):  # noqa: N802 - Qt's name
+        super().resizeEvent(event)
+        self._fit_cameras()
+
+    def showEvent(self, event):  # noqa: N802 - Qt's name
+        super().showEvent(event)
+        self._fit_cameras()
+
+    def closeEvent(self, event):  # noqa: N802 - Qt's name
+        self._teardown()
+        super().closeEvent(event)
+
+    def _teardown(self) -> None:
+        for unsubscribe in getattr(self, "_unsubscribe", []):
+            try:
+                unsubscribe()
+            except ValueError:
+                pass
+        self._unsubscribe = []
+        if not getattr(self.plotter, "_closed", True):
+            self.plotter.close()
