@@ -15,23 +15,150 @@ Events (the names are stable; a callback receives the workspace):
     :attr:`Workspace.profile` / :attr:`Workspace.profile_path` changed.
 ``sources-changed``
     :attr:`Workspace.selected_sources` changed (illuminant library ids).
+``measurement-changed``
+    :attr:`Workspace.measurement` changed (a :class:`MeasurementState`: what
+    the running calibration measures, with what, and how far it got).
+
+Opening a file is two steps so that a window can do the slow one in a worker
+thread: :func:`load_path` reads and diagnoses (no state, any thread), then
+:meth:`Workspace.apply` sets the state and emits (the thread the views live
+in). :meth:`Workspace.open_path` does both.
 """
 
 from __future__ import annotations
 
+import json
 from collections import defaultdict
 from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from workbench.errors import WorkbenchError
 
-__all__ = ["EVENTS", "DEFAULT_SOURCES", "Workspace"]
+__all__ = ["EVENTS", "DEFAULT_SOURCES", "MEASUREMENT_STATUSES", "LoadedPath", "MeasurementState",
+           "Workspace", "load_path", "is_profile_file", "unfinished_journal"]
 
-EVENTS = ("session-changed", "diagnosis-changed", "profile-changed", "sources-changed")
+EVENTS = ("session-changed", "diagnosis-changed", "profile-changed", "sources-changed",
+          "measurement-changed")
 """Every event a :class:`Workspace` emits."""
 
 DEFAULT_SOURCES = ("cie-d65", "d65-two-peak")
 """Sources selected in a new workspace: the paper's reference and its metamer."""
+
+
+MEASUREMENT_STATUSES = ("idle", "running", "paused", "finished", "cancelled", "aborted")
+"""What :attr:`MeasurementState.status` may be."""
+
+
+@dataclass(frozen=True)
+class MeasurementState:
+    """The calibration the workspace runs, as the status bar and the pages show it.
+
+    Attributes
+    ----------
+    status : str
+        One of :data:`MEASUREMENT_STATUSES`.
+    instrument : str
+        The instrument in use (e.g. ``"simulated CS-2000"``, ``"CS-2000 on /dev/ttyACM0"``).
+    display : str
+        The patch display in use.
+    out_dir : Path or None
+        Where the journal and the session files are written.
+    done, total : int
+        Patches measured so far, and in the plan.
+    message : str
+        Why the run stopped, for ``aborted``; empty otherwise.
+    """
+
+    status: str = "idle"
+    instrument: str = ""
+    display: str = ""
+    out_dir: Path | None = None
+    done: int = 0
+    total: int = 0
+    message: str = ""
+
+    def __post_init__(self):
+        if self.status not in MEASUREMENT_STATUSES:
+            raise WorkbenchError(f"unknown measurement status {self.status!r}; known: "
+                                 f"{', '.join(MEASUREMENT_STATUSES)}")
+
+
+@dataclass(frozen=True, eq=False)
+class LoadedPath:
+    """What :func:`load_path` read: a session and its diagnosis, and a profile if the file is one.
+
+    Attributes
+    ----------
+    path : Path
+    session : Session
+    diagnosis : Diagnosis
+    profile : Profile or None
+        Set when ``path`` is a ``.vrprofile.json``.
+    """
+
+    path: Path
+    session: object
+    diagnosis: object
+    profile: object = None
+
+
+def is_profile_file(path: str | Path) -> bool:
+    """Whether ``path`` is a JSON file whose ``format`` says it is a workbench profile."""
+    from workbench.profile import PROFILE_FORMAT
+
+    path = Path(path)
+    if not (path.is_file() and path.suffix.lower() == ".json"):
+        return False
+    try:
+        return json.loads(path.read_text(encoding="utf-8")).get("format") == PROFILE_FORMAT
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def load_path(path: str | Path) -> LoadedPath:
+    """Read anything ``diagnose`` reads and diagnose it (no workspace state is touched).
+
+    Parameters
+    ----------
+    path : path-like
+        A session CSV, an Argyll ``.ti3``, a Psychtoolbox ``.mat``, a
+        measurement directory (its ``session.csv``) or a ``.vrprofile.json``
+        (diagnosed from its primaries, and loaded as the profile too).
+
+    Raises
+    ------
+    WorkbenchError
+        If the file cannot be read or diagnosed; the message names it and the fix.
+    """
+    from workbench.diagnostics import diagnose
+    from workbench.profile import load_profile
+    from workbench.session_readers import read_session
+
+    path = Path(path)
+    if not path.exists():
+        raise WorkbenchError(f"{path}: no such file or directory; choose a session CSV, .ti3, .mat, "
+                             "a measurement directory or a .vrprofile.json")
+    profile = load_profile(path) if is_profile_file(path) else None
+    session = read_session(path)
+    return LoadedPath(path, session, diagnose(session), profile)
+
+
+def unfinished_journal(directory: str | Path):
+    """The journal in ``directory`` if its session was left unfinished (patches to measure), else ``None``.
+
+    A killed or cancelled calibration leaves a journal with patches that have
+    no successful record; the window offers to resume it.
+    """
+    from workbench.measurement.journal import read_journal
+    from workbench.measurement.runner import JOURNAL_NAME
+
+    path = Path(directory) / JOURNAL_NAME
+    if not path.is_file():
+        return None
+    journal = read_journal(path)
+    ok = {i for i, r in journal.latest().items() if r.ok}
+    return journal if len(ok) < len(journal.header.plan) else None
 
 
 class Workspace:
@@ -52,6 +179,7 @@ class Workspace:
         self.profile = paper_vive_profile()
         self.profile_path: Path | None = None
         self.selected_sources: tuple[str, ...] = DEFAULT_SOURCES
+        self.measurement = MeasurementState()
 
     # -- events -------------------------------------------------------------
     def subscribe(self, event: str, callback: Callable[["Workspace"], None]) -> Callable[[], None]:
@@ -88,3 +216,43 @@ class Workspace:
             raise WorkbenchError("select at least one light source")
         self.selected_sources = ids
         self.emit("sources-changed")
+
+    def set_measurement(self, state: MeasurementState | None = None, **changes) -> None:
+        """Replace the measurement state, or change some of its fields (``status=...``)."""
+        self.measurement = replace(state or self.measurement, **changes)
+        self.emit("measurement-changed")
+
+    # -- files ----------------------------------------------------------------
+    def apply(self, loaded: LoadedPath) -> None:
+        """Make what :func:`load_path` read the workspace's session, diagnosis (and profile)."""
+        self.set_session(loaded.session, loaded.path)
+        self.set_diagnosis(loaded.diagnosis)
+        if loaded.profile is not None:
+            self.set_profile(loaded.profile, loaded.path)
+
+    def open_path(self, path: str | Path) -> LoadedPath:
+        """Read, diagnose and apply ``path`` (see :func:`load_path`); returns what was read."""
+        loaded = load_path(path)
+        self.apply(loaded)
+        return loaded
+
+    def export_profile(self, path: str | Path) -> Path:
+        """Write the diagnosis's profile to ``path`` (validated before writing), then make it current.
+
+        The extended model is written (the baseline's when nothing was found),
+        with its held-out validation figures, the findings and the paper's
+        lights, exactly as ``diagnose SESSION --export PROFILE`` writes it.
+
+        Raises
+        ------
+        WorkbenchError
+            If there is no diagnosis yet, or the profile does not validate.
+        """
+        from workbench.cli.diagnose import export_profile
+        from workbench.profile import load_profile
+
+        if self.diagnosis is None:
+            raise WorkbenchError("nothing to export: calibrate, or open a session (File ▸ Open), first")
+        written = export_profile(self.diagnosis, path)
+        self.set_profile(load_profile(written), written)
+        return Path(written)

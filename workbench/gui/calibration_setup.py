@@ -1,0 +1,287 @@
+"""What a guided calibration measures, with what, and where it shows the patches (no Qt).
+
+:class:`CalibrationSetup` is what the Calibrate page's form produces;
+:func:`open_run` turns it into a :class:`~workbench.measurement.runner.MeasurementRun`
+wired the way ``measure`` wires it (the simulated headset measured by the
+CS-2000 emulator on a pty, or a real CS-2000; the simulated headset, a
+full-screen patch window or a VR application's patch server), a new session
+or the resumption of the one journaled in the output directory.
+:func:`plan_estimate` says how many patches a plan has and how long the
+instrument would take, before anything starts.
+
+This module imports no Qt: a test or a script drives a calibration with it
+exactly as the window does.
+"""
+
+from __future__ import annotations
+
+import secrets
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from instruments.cs2000 import find_cs2000_ports, open_cs2000
+from instruments.headset import HEADSET_EFFECTS, SimulatedHeadset
+from instruments.patch_display import (
+    MirroredPatchDisplay,
+    PatchDisplayError,
+    SimulatedPatchDisplay,
+    TcpPatchDisplay,
+)
+from workbench.errors import InputError, WorkbenchError
+from workbench.measurement.journal import read_journal
+from workbench.measurement.plans import MEASUREMENT_PLANS, MeasurementPlan, measurement_plan, read_plan_file
+from workbench.measurement.runner import JOURNAL_NAME, MeasurementRun
+from workbench.measurement.simulation import modelled_plan_duration_s, open_simulated_instrument
+
+__all__ = ["SIMULATED", "DISPLAY_KINDS", "CalibrationSetup", "PlanEstimate", "plan_estimate",
+           "cs2000_ports", "planned", "open_run", "test_tcp_display"]
+
+SIMULATED = "simulated"
+"""The instrument (and display) name of the simulation."""
+
+DISPLAY_KINDS = {
+    "simulated": "simulated headset",
+    "window": "full-screen window",
+    "tcp": "VR application (TCP patch protocol)",
+}
+"""Patch display kind → how the form names it."""
+
+_INSTRUMENT_TIMEOUT_S = 10.0  # design §6: read timeout at least 10 s
+_DISPLAY_TIMEOUT_S = 10.0
+
+
+@dataclass(frozen=True)
+class CalibrationSetup:
+    """A calibration to run.
+
+    Attributes
+    ----------
+    out_dir : Path
+        Output directory (journal, ``session.csv``, ``session.ti3``); a
+        journal already there is resumed.
+    instrument : str
+        :data:`SIMULATED`, a serial device (``/dev/ttyACM0``), or ``"auto"``
+        (the one CS-2000 connected by USB, found by VID/PID).
+    effects : dict
+        With the simulation: headset effect id → magnitude
+        (:data:`instruments.headset.HEADSET_EFFECTS`).
+    time_scale : float
+        With the simulation: fraction of real instrument timing to wait.
+    display : str
+        A key of :data:`DISPLAY_KINDS`.
+    screen : int or None
+        For ``window``: the screen; ``None`` is the last (the headset in extended mode).
+    tcp_address : (str, int) or None
+        For ``tcp``: the patch server's host and port.
+    plan_name : str
+        A built-in plan (``paper``, ``quick``) or ``"file"``.
+    plan_file : Path or None
+        For ``plan_name == "file"``: a CSV plan (``kind,r,g,b``).
+    seed : int or None
+        Seed of the validation colours and the simulated noise; ``None`` draws one.
+    faults : tuple
+        Emulator faults to inject (:mod:`instruments.cs2000.emulator`), for
+        rehearsing what the window shows when the instrument fails.
+    remeasure : tuple of int
+        Plan indices to measure again on resume (the newer record wins).
+    """
+
+    out_dir: Path
+    instrument: str = SIMULATED
+    effects: dict = field(default_factory=dict)
+    time_scale: float = 0.0
+    display: str = "simulated"
+    screen: int | None = None
+    tcp_address: tuple | None = None
+    plan_name: str = "paper"
+    plan_file: Path | None = None
+    seed: int | None = None
+    faults: tuple = ()
+    remeasure: tuple = ()
+
+    def __post_init__(self):
+        simulated = self.instrument == SIMULATED
+        if self.display not in DISPLAY_KINDS:
+            raise InputError(f"unknown patch display {self.display!r}; choose one of {', '.join(DISPLAY_KINDS)}")
+        if self.display == "simulated" and not simulated:
+            raise InputError("a real CS-2000 cannot measure the simulated headset; show the patches in a "
+                             "full-screen window or a VR application")
+        if self.display == "tcp" and not self.tcp_address:
+            raise InputError("the TCP patch display needs a host and a port (e.g. 127.0.0.1:47800)")
+        if self.effects and not simulated:
+            raise InputError("headset effects apply to the simulated CS-2000 only")
+        unknown = sorted(set(self.effects) - set(HEADSET_EFFECTS))
+        if unknown:
+            raise InputError(f"unknown headset effect {unknown[0]!r}; known: {', '.join(HEADSET_EFFECTS)}")
+        if self.time_scale < 0:
+            raise InputError(f"time scale {self.time_scale} is negative; give 0 (no waiting) to 1 (real timing)")
+        if self.plan_name != "file" and self.plan_name not in MEASUREMENT_PLANS:
+            raise InputError(f"unknown plan {self.plan_name!r}; choose one of "
+                             f"{', '.join(sorted(MEASUREMENT_PLANS))} or a plan file")
+        if self.plan_name == "file" and not self.plan_file:
+            raise InputError("choose a plan file (CSV with columns kind,r,g,b)")
+
+    @property
+    def simulated(self) -> bool:
+        return self.instrument == SIMULATED
+
+    def plan(self, seed: int | None = None) -> MeasurementPlan:
+        """The plan to measure (a built-in one is drawn with ``seed``, else :attr:`seed`)."""
+        if self.plan_name == "file":
+            return read_plan_file(self.plan_file)
+        seed = seed if seed is not None else self.seed
+        return measurement_plan(self.plan_name, 0 if seed is None else seed)
+
+    def describe_instrument(self) -> str:
+        """E.g. ``"simulated CS-2000 (channel-interaction 0.1)"`` or ``"CS-2000 on /dev/ttyACM0"``."""
+        if self.simulated:
+            effects = ", ".join(f"{k} {v:g}" for k, v in self.effects.items())
+            return f"simulated CS-2000{f' ({effects})' if effects else ''}"
+        return "CS-2000 (found by USB VID/PID)" if self.instrument == "auto" else f"CS-2000 on {self.instrument}"
+
+    def describe_display(self) -> str:
+        """E.g. ``"full-screen window on screen 1"``."""
+        if self.display == "window":
+            return f"full-screen window on {'the last screen' if self.screen is None else f'screen {self.screen}'}"
+        if self.display == "tcp":
+            return f"VR application at tcp:{self.tcp_address[0]}:{self.tcp_address[1]}"
+        return DISPLAY_KINDS[self.display]
+
+
+@dataclass(frozen=True)
+class PlanEstimate:
+    """A plan's patch count and the instrument time it is expected to take.
+
+    Attributes
+    ----------
+    patches : int
+    counts : dict
+        Patches per kind.
+    instrument_s : float
+        Seconds the CS-2000 would take for every patch on the simulated
+        headset of Table 1 (normal speed, auto ND; dark patches take longest).
+    """
+
+    patches: int
+    counts: dict
+    instrument_s: float
+
+
+def plan_estimate(plan: MeasurementPlan, effects: dict | None = None) -> PlanEstimate:
+    """Patch count and modelled instrument time of ``plan`` (see :class:`PlanEstimate`)."""
+    headset = SimulatedHeadset(effects or {})
+    return PlanEstimate(len(plan), plan.counts(), modelled_plan_duration_s(plan, headset))
+
+
+def cs2000_ports() -> list:
+    """``[(device, description)]`` of the serial ports whose USB VID/PID is a CS-2000's."""
+    return find_cs2000_ports()
+
+
+def test_tcp_display(host: str, port: int, timeout_s: float = 3.0) -> str:
+    """Connect to a patch server, say hello and disconnect; returns the display it names.
+
+    Raises
+    ------
+    WorkbenchError
+        If it cannot be reached or speaks another protocol; the message says what to check.
+    """
+    try:
+        with TcpPatchDisplay(host, port, timeout_s, client="vr-workbench gui") as display:
+            return display.display_name or f"tcp:{host}:{port}"
+    except PatchDisplayError as error:
+        raise WorkbenchError(str(error)) from None
+
+
+test_tcp_display.__test__ = False  # not a pytest test, whatever its name
+
+
+def planned(setup: CalibrationSetup) -> tuple:
+    """``(plan, journal)``: what :func:`open_run` will measure; the journal in ``out_dir`` (resume) or None."""
+    path = Path(setup.out_dir) / JOURNAL_NAME
+    journal = read_journal(path) if path.is_file() else None
+    return (setup.plan() if journal is None else journal.header.plan), journal
+
+
+@contextmanager
+def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
+    """Open the instrument and the patch display and yield the run (new, or resumed from the journal).
+
+    Parameters
+    ----------
+    setup : CalibrationSetup
+    window_display : PatchDisplay, optional
+        For ``setup.display == "window"``: the patch window's display, opened
+        by the caller in the GUI thread (its ``show`` may be called from a worker).
+    on_countdown : callable, optional
+        ``on_countdown(remaining_s, total_s)`` while the instrument measures.
+
+    Yields
+    ------
+    MeasurementRun
+        Iterate its ``events()``; everything is closed when the block ends.
+
+    Raises
+    ------
+    WorkbenchError
+        If the instrument or the display cannot be opened, or the journal in
+        ``out_dir`` was measured another way.
+    """
+    out_dir = Path(setup.out_dir)
+    plan, journal = planned(setup)
+    if journal is not None and bool(journal.header.settings.get("simulated")) != setup.simulated:
+        raise InputError(f"{journal.path} was measured {'with' if not setup.simulated else 'without'} a "
+                         "real CS-2000; resume it with the same instrument, or choose another output directory")
+    with ExitStack() as stack:
+        simulation = None
+        settings = {"simulated": setup.simulated} if journal is None else dict(journal.header.settings)
+        if setup.simulated:
+            if journal is None:
+                seed = setup.seed if setup.seed is not None else (plan.seed if plan.seed is not None
+                                                                  else secrets.randbelow(2**31))
+                noise, effects = seed, dict(setup.effects)
+                settings.update(effects=effects, time_scale=setup.time_scale, noise_seed=seed)
+            else:
+                recorded = settings.get("noise_seed", plan.seed)
+                seed = secrets.randbelow(2**31) if recorded is None else int(recorded)
+                noise = np.random.SeedSequence([seed, len(journal.resumes) + 1])
+                effects = dict(settings.get("effects", {}))
+            simulation = stack.enter_context(open_simulated_instrument(
+                effects, seed=noise, time_scale=setup.time_scale, faults=setup.faults,
+                clock_offset_s=0.0 if journal is None else journal.session_end_s(), plan=plan,
+                session_length_s=settings.get("session_length_s")))
+            settings["session_length_s"] = simulation.headset.session_length_s
+        display = _open_display(stack, setup, simulation, window_display)
+        port = simulation.server.port if simulation else (None if setup.instrument == "auto" else setup.instrument)
+        meter = stack.enter_context(open_cs2000(port, timeout_s=_INSTRUMENT_TIMEOUT_S, no_flash_write="if-supported"))
+        options = {"on_countdown": on_countdown}
+        if simulation:
+            options["clock"] = lambda header, journal: simulation.clock
+        if journal is None:
+            settings["remote_mode"] = meter.remote_mode
+            run = MeasurementRun.start(out_dir, plan, display, meter, settings=settings, **options)
+        else:
+            details = {"noise_seed": [int(v) for v in noise.entropy]} if simulation else None
+            run = MeasurementRun.resume_session(out_dir, display, meter, journal=journal, resume_details=details,
+                                                remeasure=setup.remeasure, **options)
+        yield run
+
+
+def _open_display(stack: ExitStack, setup: CalibrationSetup, simulation, window_display):
+    if setup.display == "simulated":
+        return SimulatedPatchDisplay(simulation.headset)
+    if setup.display == "window":
+        if window_display is None:
+            raise WorkbenchError("the full-screen patch window was not opened; choose the screen again")
+        shown = window_display
+    else:
+        host, port = setup.tcp_address
+        try:
+            shown = stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S, client="vr-workbench gui"))
+        except PatchDisplayError as error:
+            raise WorkbenchError(str(error)) from None
+    # A simulated session measures the simulated headset, so it must see the patches too.
+    return MirroredPatchDisplay(shown, SimulatedPatchDisplay(simulation.headset)) if simulation else shown

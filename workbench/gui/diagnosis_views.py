@@ -1,0 +1,285 @@
+"""What the Fit & diagnose page plots, taken from a :class:`~workbench.diagnostics.Diagnosis` (no Qt).
+
+The page draws arrays; this module gets them from the diagnosis and the
+models it fitted (the models' own ``forward`` and tone curves, the
+diagnosis's ΔE00 arrays and ``to_json()``), the same quantities the HTML
+report (:mod:`workbench.diagnostics.report`) plots. Nothing here fits or
+scores anything. Units: DAC 0–255; normalized output (1 = full drive);
+residuals in % of full drive; session time in minutes; ΔE00 CIEDE2000 in the
+CIELAB of the measured display white.
+
+Findings are shown generically: :func:`finding_cards` turns every field a
+finding has in ``to_json()`` (and every entry elsewhere in it that names the
+same effect) into a card, so fields the diagnosis gains later appear without
+a change here. :data:`FINDING_PLOTS` maps an effect to the plot of its evidence.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import colour
+import numpy as np
+
+from workbench.diagnostics.evidence import channel_sweeps, xy_of
+
+__all__ = [
+    "CHANNEL_NAMES",
+    "Series",
+    "PlotView",
+    "SweepView",
+    "ValidationRow",
+    "FindingCard",
+    "XYZ_to_srgb8",
+    "sweep_views",
+    "additivity_view",
+    "grey_additivity_view",
+    "chromaticity_view",
+    "white_reference_view",
+    "validation_rows",
+    "histogram_view",
+    "finding_cards",
+    "summary_lines",
+    "FINDING_PLOTS",
+]
+
+CHANNEL_NAMES = ("red", "green", "blue")
+_GRID = np.linspace(0.0, 1.0, 256)
+
+
+@dataclass(frozen=True)
+class Series:
+    """One curve or set of points: ``x``, ``y``, a name and a colour index (0–2 channels, 3 grey)."""
+
+    name: str
+    x: np.ndarray
+    y: np.ndarray
+    colour: int = 3
+    points: bool = True
+
+
+@dataclass(frozen=True)
+class PlotView:
+    """A titled plot: axis labels with units and its series."""
+
+    title: str
+    x_label: str
+    y_label: str
+    series: tuple = ()
+
+
+@dataclass(frozen=True)
+class SweepView:
+    """One channel's sweep fit (top) and residuals (bottom): baseline vs extended."""
+
+    fit: PlotView
+    residuals: PlotView
+
+
+def XYZ_to_srgb8(XYZ, white_XYZ) -> np.ndarray:
+    """XYZ (absolute) → 8-bit sRGB for a swatch on the screen, the display white shown as sRGB white.
+
+    ``XYZ`` is scaled by the white's Y and adapted (Bradford) from the white's
+    chromaticity to D65; values outside sRGB are clipped.
+    """
+    XYZ = np.asarray(XYZ, dtype=float)
+    white = np.asarray(white_XYZ, dtype=float)
+    rgb = colour.XYZ_to_sRGB(XYZ / white[1], illuminant=xy_of(white[None])[0],
+                             chromatic_adaptation_transform="Bradford")
+    return np.round(255 * np.clip(np.nan_to_num(rgb), 0, 1)).astype(np.uint8)
+
+
+def sweep_views(diagnosis) -> tuple:
+    """Per channel: measured points with the baseline power law and the extended curve, and residuals."""
+    raw_sweeps = channel_sweeps(diagnosis.context.raw, np.zeros(3))
+    extended = diagnosis.extended
+    views = []
+    for c, sweep in enumerate(diagnosis.context.sweeps):
+        raw = raw_sweeps[c]
+        gamma = float(diagnosis.baseline.gamma[c])
+        fit = [Series("measured (baseline's data)", raw.drive * 255, raw.output, 3),
+               Series(f"baseline γ = {gamma:.2f}", _GRID * 255, _GRID ** gamma, 3, points=False)]
+        residuals = [Series("baseline", raw.drive * 255, 100 * (raw.output - raw.drive ** gamma), 3)]
+        if hasattr(extended, "tone"):
+            curve = extended.tone[c]
+            fit += [Series("black subtracted" + (", drift corrected" if diagnosis.context.drift_found else ""),
+                           sweep.drive * 255, sweep.output, c),
+                    Series(f"extended ({curve.form})", _GRID * 255, curve.forward(_GRID), c, points=False)]
+            residuals.append(Series("extended", sweep.drive * 255,
+                                    100 * (sweep.output - curve.forward(sweep.drive)), c))
+        name = CHANNEL_NAMES[c]
+        views.append(SweepView(PlotView(f"{name} sweep", "DAC", "output / full drive", tuple(fit)),
+                               PlotView(f"{name} residuals", "DAC", "residual, % of full drive", tuple(residuals))))
+    return tuple(views)
+
+
+def additivity_view(diagnosis) -> PlotView:
+    """White vs R + G + B (black subtracted), per tristimulus value, in %."""
+    context = diagnosis.context
+    ratio = 100 * (context.white - context.black) / sum(s.full_XYZ for s in context.sweeps)
+    return PlotView("additivity: white / (R + G + B)", "tristimulus value (0 X, 1 Y, 2 Z)", "white / (R+G+B), %",
+                    (Series("measured", np.arange(3.0), ratio, 3),))
+
+
+def grey_additivity_view(diagnosis) -> PlotView | None:
+    """Greys vs the sum of their channels at the same DAC (Y, black subtracted, %), where both were measured."""
+    context = diagnosis.context
+    session = context.fit
+    grey = (session.rgb[:, 0] == session.rgb[:, 1]) & (session.rgb[:, 1] == session.rgb[:, 2]) \
+        & (session.rgb[:, 0] > 0) & (session.rgb[:, 0] < 255)
+    if not grey.any():
+        return None
+    level = session.rgb[grey, 0]
+    summed = sum(np.interp(level / 255, s.drive, s.XYZ[:, 1], left=np.nan, right=np.nan) for s in context.sweeps)
+    measured = session.XYZ[grey, 1] - context.black[1]
+    usable = np.isfinite(summed) & (summed > 0.02 * sum(s.full_XYZ[1] for s in context.sweeps))
+    if not usable.any():
+        return None
+    return PlotView("greys vs the sum of their channels", "DAC", "grey Y / (R+G+B) Y, %",
+                    (Series("greys", level[usable], 100 * measured[usable] / summed[usable], 3),))
+
+
+def chromaticity_view(diagnosis) -> PlotView:
+    """Each primary's xy distance from its full-drive chromaticity vs drive."""
+    series = []
+    for c, sweep in enumerate(diagnosis.context.sweeps):
+        usable = sweep.output >= 0.02
+        distance = np.hypot(*(xy_of(sweep.XYZ[usable]) - sweep.full_xy).T)
+        series.append(Series(CHANNEL_NAMES[c], sweep.drive[usable] * 255, distance, c))
+    return PlotView("chromaticity vs drive", "DAC", "Δxy from full drive", tuple(series))
+
+
+def white_reference_view(diagnosis) -> PlotView | None:
+    """The white references' Y over the session (% of the last ones), or None without times."""
+    drift = diagnosis.context.drift
+    if drift is None:
+        return None
+    return PlotView("white references over time", "session time, min", "white Y, % of final",
+                    (Series("white", drift.times / 60, 100 * drift.gains, 3),))
+
+
+@dataclass(frozen=True)
+class ValidationRow:
+    """A held-out colour: DAC, measured and predicted swatches, ΔE00 of baseline and extended."""
+
+    rgb: tuple
+    measured_srgb8: tuple
+    baseline_srgb8: tuple
+    extended_srgb8: tuple
+    baseline_dE00: float
+    extended_dE00: float
+
+
+def validation_rows(diagnosis) -> tuple:
+    """The validation colours, worst (extended ΔE00) first; empty without validation colours."""
+    validation = diagnosis.session.select("validation")
+    if len(validation) == 0 or diagnosis.extended_dE.size != len(validation):
+        return ()
+    white = diagnosis.white
+    extended = diagnosis.extended.forward(validation.rgb)
+    if diagnosis.context.drift_found and validation.t_s is not None:
+        extended = extended * diagnosis.context.drift.gain(validation.t_s)[:, None]
+    measured = XYZ_to_srgb8(validation.XYZ, white)
+    baseline = XYZ_to_srgb8(diagnosis.baseline.forward(validation.rgb), white)
+    extended = XYZ_to_srgb8(extended, white)
+    rows = [ValidationRow(tuple(int(v) for v in validation.rgb[i]), tuple(measured[i]), tuple(baseline[i]),
+                          tuple(extended[i]), float(diagnosis.baseline_dE[i]), float(diagnosis.extended_dE[i]))
+            for i in range(len(validation))]
+    return tuple(sorted(rows, key=lambda r: r.extended_dE00, reverse=True))
+
+
+def histogram_view(diagnosis, bins: int = 20) -> PlotView | None:
+    """ΔE00 histograms of baseline and extended on the same bins (x: bin centres)."""
+    if diagnosis.baseline_dE.size == 0:
+        return None
+    top = float(max(diagnosis.baseline_dE.max(), diagnosis.extended_dE.max()))
+    edges = np.linspace(0, top * 1.05 + 1e-9, bins + 1)
+    centres = (edges[:-1] + edges[1:]) / 2
+    return PlotView("ΔE00 on held-out colours", "ΔE00", "colours",
+                    (Series("baseline", centres, np.histogram(diagnosis.baseline_dE, edges)[0].astype(float), 3),
+                     Series("extended", centres, np.histogram(diagnosis.extended_dE, edges)[0].astype(float), 2)))
+
+
+def _tone_plot(diagnosis, result) -> PlotView:
+    series = []
+    for c, view in enumerate(sweep_views(diagnosis)):
+        baseline = view.residuals.series[0]
+        series.append(Series(CHANNEL_NAMES[c], baseline.x, baseline.y, c))
+    return PlotView("baseline power-law residuals", "DAC", "residual, % of full drive", tuple(series))
+
+
+def _black_plot(diagnosis, result) -> PlotView:
+    views = sweep_views(diagnosis)
+    series = tuple(Series(CHANNEL_NAMES[c], v.fit.series[0].x, v.fit.series[0].y, c) for c, v in enumerate(views))
+    return PlotView("sweeps as measured (black included)", "DAC", "output / full drive", series)
+
+
+FINDING_PLOTS = {
+    "temporal-drift": lambda d, r: white_reference_view(d),
+    "black-offset": _black_plot,
+    "channel-interaction": lambda d, r: additivity_view(d),
+    "chromaticity-shift": lambda d, r: chromaticity_view(d),
+    "tone-curve-shape": _tone_plot,
+}
+"""Effect id → ``plot(diagnosis, finding_json)``: the evidence plot of its card (None: no plot)."""
+
+
+@dataclass(frozen=True)
+class FindingCard:
+    """A finding as a card: its effect, its evidence, every other field as (name, text), and a plot."""
+
+    effect: str
+    evidence: str
+    fields: tuple = ()
+    plot: PlotView | None = None
+    extra: dict = field(default_factory=dict)
+
+
+def _text(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if isinstance(value, dict):
+        return ", ".join(f"{k} {_text(v)}" for k, v in value.items())
+    if isinstance(value, list | tuple):
+        return ", ".join(_text(v) for v in value)
+    return str(value)
+
+
+def _entries_naming(value, effect: str, path: str):
+    """Every dict under ``value`` whose ``effect`` is ``effect``, with where it was found."""
+    if isinstance(value, dict):
+        if value.get("effect") == effect:
+            yield path, value
+        for key, item in value.items():
+            yield from _entries_naming(item, effect, f"{path}.{key}" if path else key)
+    elif isinstance(value, list):
+        for item in value:
+            yield from _entries_naming(item, effect, path)
+
+
+def finding_cards(diagnosis) -> tuple:
+    """One card per finding in ``diagnosis.to_json()["findings"]``, with every field it has."""
+    document = diagnosis.to_json()
+    cards = []
+    for finding in document.get("findings", []):
+        effect = str(finding.get("effect", "?"))
+        fields = [(k, _text(v)) for k, v in finding.items() if k not in ("effect", "evidence")]
+        for where, entry in _entries_naming({k: v for k, v in document.items() if k != "findings"}, effect, ""):
+            fields += [(f"{where}: {k}", _text(v)) for k, v in entry.items() if k != "effect"]
+        plot = FINDING_PLOTS.get(effect)
+        cards.append(FindingCard(effect, str(finding.get("evidence", "")), tuple(fields),
+                                 None if plot is None else plot(diagnosis, finding)))
+    return tuple(cards)
+
+
+def summary_lines(diagnosis) -> tuple:
+    """The verdict as lines of text: every top-level entry of ``to_json()`` but the findings."""
+    document = diagnosis.to_json()
+    lines = []
+    for key, value in document.items():
+        if key == "findings" or value is None:
+            continue
+        if isinstance(value, dict):
+            value = {k: v for k, v in value.items() if k not in ("terms",)}
+        lines.append((key, _text(value)))
+    return tuple(lines)

@@ -1,0 +1,349 @@
+"""Calibrate: set up and run a guided calibration, watch it measure, re-measure what failed.
+
+The run itself is a :class:`~workbench.gui.workers.MeasurementWorker` (the
+runner's event generator in a ``QThread``); this page only shows its events:
+the patch being measured as a split swatch (nominal DAC colour beside what
+the current profile predicts for it, then what was measured), its DAC values
+and the instrument's countdown, a progress bar with the runner's ETA (which
+knows dark patches are slow), the live sweep and white-reference plots, and
+the table of patches (failures with their reason; re-measure any of them).
+When a run finishes, the session is read and diagnosed off the GUI thread and
+put into the workspace, which fills the other pages.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import replace
+
+import numpy as np
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import (
+    QHBoxLayout,
+    QLabel,
+    QProgressBar,
+    QPushButton,
+    QScrollArea,
+    QSplitter,
+    QVBoxLayout,
+    QWidget,
+)
+
+from workbench.errors import WorkbenchError
+from workbench.gui.calibration_setup import CalibrationSetup, planned
+from workbench.gui.diagnosis_views import XYZ_to_srgb8
+from workbench.gui.widgets.calibration_form import CalibrationForm
+from workbench.gui.widgets.measurement_plots import MeasurementPlots
+from workbench.gui.widgets.patch_swatch import SplitSwatch
+from workbench.gui.widgets.patch_table import PatchTable
+from workbench.gui.workers import CallWorker, MeasurementWorker, describe_error
+from workbench.measurement.runner import (
+    PatchMeasured,
+    PatchStarted,
+    RunFinished,
+    RunPaused,
+    RunResumed,
+    RunStarted,
+    format_duration,
+)
+from workbench.workspace import load_path, unfinished_journal
+
+__all__ = ["CalibratePage"]
+
+_LOG = logging.getLogger(__name__)
+
+
+class _WindowPatchDisplay:
+    """The patch window's display as the worker sees it: shows, never closes (the page closes the window)."""
+
+    def __init__(self, display):
+        self._display = display
+        self._description = display.describe()
+
+    def show(self, rgb_dac) -> None:
+        self._display.show(rgb_dac)
+
+    def close(self) -> None:
+        """Nothing: the window belongs to the page."""
+
+    def describe(self) -> str:
+        return self._description
+
+
+class CalibratePage(QWidget):
+    """The guided calibration.
+
+    Signals
+    -------
+    run_finished(object)
+        The run's :class:`~workbench.measurement.runner.RunSummary`.
+    session_loaded()
+        The finished session was read, diagnosed and put into the workspace.
+    error(str)
+        A run could not start or stopped; the message says what to do.
+    """
+
+    title = "Calibrate"
+    run_finished = Signal(object)
+    session_loaded = Signal()
+    error = Signal(str)
+
+    def __init__(self, workspace, parent=None):
+        super().__init__(parent)
+        self.workspace = workspace
+        self.worker: MeasurementWorker | None = None
+        self._loaders: list = []
+        self._patch_window = None
+        self._white_XYZ = None
+        self._setup: CalibrationSetup | None = None
+
+        self.form = CalibrationForm()
+        form_scroll = QScrollArea()
+        form_scroll.setWidget(self.form)
+        form_scroll.setWidgetResizable(True)
+        form_scroll.setMinimumWidth(380)
+
+        self.start_button = QPushButton("Start")
+        self.pause_button = QPushButton("Pause")
+        self.cancel_button = QPushButton("Cancel")
+        self.start_button.setToolTip("start the calibration (Ctrl+R); a journal in the output directory is resumed")
+        buttons = QHBoxLayout()
+        for button in (self.start_button, self.pause_button, self.cancel_button):
+            buttons.addWidget(button)
+        self.swatch = SplitSwatch()
+        self.patch_label = QLabel("no patch yet")
+        self.countdown_label = QLabel("")
+        self.progress = QProgressBar()
+        self.progress.setFormat("%v of %m patches")
+        self.eta_label = QLabel("")
+        self.message = QLabel("")
+        self.message.setWordWrap(True)
+        self.message.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.plots = MeasurementPlots()
+        self.patches = PatchTable()
+
+        status = QVBoxLayout()
+        status.addLayout(buttons)
+        status.addWidget(self.patch_label)
+        status.addWidget(self.countdown_label)
+        status.addWidget(self.progress)
+        status.addWidget(self.eta_label)
+        status.addWidget(self.message)
+        top = QHBoxLayout()
+        top.addWidget(self.swatch, 1)
+        top.addLayout(status, 1)
+        right = QSplitter(Qt.Orientation.Vertical)
+        top_widget = QWidget()
+        top_widget.setLayout(top)
+        right.addWidget(top_widget)
+        right.addWidget(self.plots)
+        right.addWidget(self.patches)
+        right.setSizes([180, 320, 260])
+        splitter = QSplitter()
+        splitter.addWidget(form_scroll)
+        splitter.addWidget(right)
+        splitter.setSizes([400, 1000])
+        layout = QHBoxLayout(self)
+        layout.addWidget(splitter)
+
+        self.start_button.clicked.connect(lambda: self.start())
+        self.pause_button.clicked.connect(self.toggle_pause)
+        self.cancel_button.clicked.connect(self.cancel)
+        self.patches.remeasure.connect(self.remeasure)
+        self.form.changed.connect(self._update_start_label)
+        self._set_running(False)
+        self._update_start_label()
+
+    # -- controls -----------------------------------------------------------------------
+    @property
+    def running(self) -> bool:
+        return self.worker is not None and self.worker.isRunning()
+
+    def _update_start_label(self) -> None:
+        try:
+            journal = unfinished_journal(self.form.setup().out_dir)
+        except WorkbenchError:
+            journal = None
+        self.start_button.setText("Resume" if journal is not None else "Start")
+
+    def _set_running(self, running: bool) -> None:
+        self.start_button.setEnabled(not running)
+        self.pause_button.setEnabled(running)
+        self.cancel_button.setEnabled(running)
+        self.form.setEnabled(not running)
+        self.patches.set_idle(not running)
+        if not running:
+            self.pause_button.setText("Pause")
+
+    def start(self, setup: CalibrationSetup | None = None) -> None:
+        """Start (or resume) the calibration the form describes, or ``setup``."""
+        if self.running:
+            return
+        try:
+            setup = setup or self.form.setup()
+            plan, journal = planned(setup)
+            window_display = self._open_patch_window(setup) if setup.display == "window" else None
+        except WorkbenchError as error:
+            self._show_error(str(error))
+            return
+        self._setup = setup
+        self.message.setText("")
+        self.plots.clear()
+        self.patches.set_plan(plan, journal)
+        self._white_XYZ = None
+        if journal is not None:
+            for record in journal.latest().values():
+                self._record_point(record)
+        self.progress.setRange(0, len(plan))
+        self.worker = MeasurementWorker(setup, window_display, self)
+        self.worker.event.connect(self._on_event)
+        self.worker.countdown.connect(self._on_countdown)
+        self.worker.failed.connect(self._on_failed)
+        self.worker.finished.connect(self._on_worker_finished)
+        self.workspace.set_measurement(status="running", instrument=setup.describe_instrument(),
+                                       display=setup.describe_display(), out_dir=setup.out_dir,
+                                       done=0, total=len(plan), message="")
+        self._set_running(True)
+        self.worker.start()
+
+    def _open_patch_window(self, setup: CalibrationSetup):
+        from workbench.gui.patch_window import PatchWindow, QtPatchDisplay
+
+        screen = setup.screen
+        if screen is None:
+            from PySide6.QtGui import QGuiApplication
+
+            screen = len(QGuiApplication.screens()) - 1
+        self._patch_window = PatchWindow(screen)
+        return _WindowPatchDisplay(QtPatchDisplay(self._patch_window, 10.0))
+
+    def toggle_pause(self) -> None:
+        if not self.running:
+            return
+        if self.pause_button.text() == "Pause":
+            self.worker.pause()
+            self.pause_button.setText("Resume")
+            self.patch_label.setText(self.patch_label.text() + " — pausing after this patch")
+        else:
+            self.worker.resume()
+            self.pause_button.setText("Pause")
+
+    def cancel(self) -> None:
+        if self.running:
+            self.worker.cancel()
+
+    def remeasure(self, indices: list) -> None:
+        """Measure these plan indices again (resuming the session in the same output directory)."""
+        if self.running or not indices:
+            return
+        base = self._setup or self.form.setup()
+        self.start(replace(base, remeasure=tuple(int(i) for i in indices)))
+
+    def stop(self) -> None:
+        """Cancel a run and wait for every worker (teardown)."""
+        if self.worker is not None:
+            self.worker.cancel()
+            self.worker.wait()
+        for loader in list(self._loaders):
+            loader.wait()
+        self.form.stop_workers()
+        self._close_patch_window()
+
+    # -- events ---------------------------------------------------------------------------
+    def _on_event(self, event) -> None:
+        if isinstance(event, RunStarted):
+            self.progress.setValue(event.done)
+        elif isinstance(event, PatchStarted):
+            self._patch_started(event)
+        elif isinstance(event, PatchMeasured):
+            self._patch_measured(event)
+        elif isinstance(event, RunPaused):
+            self.patch_label.setText(f"paused before patch #{event.next_index} ({event.done} of {event.total} done)")
+            self.workspace.set_measurement(status="paused")
+        elif isinstance(event, RunResumed):
+            self.workspace.set_measurement(status="running")
+        elif isinstance(event, RunFinished):
+            self._run_finished(event.summary)
+
+    def _patch_started(self, event: PatchStarted) -> None:
+        rgb = event.patch.rgb
+        self.patch_label.setText(f"<b>#{event.index}</b> {event.patch.kind} — DAC {rgb[0]}, {rgb[1]}, {rgb[2]}")
+        self.countdown_label.setText("")
+        self.patches.set_measuring(event.index)
+        model = self.workspace.profile.display_model()
+        predicted = XYZ_to_srgb8(model.forward(np.array([rgb], dtype=float))[0], model.white_XYZ)
+        self.swatch.set_colours(rgb, predicted, "predicted by the current profile")
+        self._show_eta(event.eta_s)
+
+    def _patch_measured(self, event: PatchMeasured) -> None:
+        record = event.record
+        self.patches.set_record(record)
+        self.progress.setValue(event.done)
+        self._show_eta(event.eta_s)
+        self.workspace.set_measurement(done=event.done)
+        if record.ok:
+            self._record_point(record)
+            white = self._white_XYZ if self._white_XYZ is not None else \
+                self.workspace.profile.display_model().white_XYZ
+            self.swatch.set_colours(record.rgb, XYZ_to_srgb8(np.array(record.XYZ), white), "measured")
+        else:
+            self.swatch.set_colours(record.rgb, None, "failed")
+            self.message.setText(f"<span style='color:#b03a2e'>patch #{record.index} failed: {record.reason}. "
+                                 "It is listed below; re-measure it when the run ends.</span>")
+
+    def _record_point(self, record) -> None:
+        if record.ok and record.kind == "white":
+            self._white_XYZ = np.array(record.XYZ)
+        self.plots.add(record)
+
+    def _show_eta(self, eta_s) -> None:
+        self.eta_label.setText("" if eta_s is None else f"about {format_duration(eta_s)} left")
+
+    def _on_countdown(self, remaining_s: float, total_s: float) -> None:
+        self.countdown_label.setText(f"instrument: {remaining_s:.0f} s left of {total_s:.0f} s")
+
+    def _on_failed(self, message: str) -> None:
+        self.workspace.set_measurement(status="aborted", message=message)
+        self._show_error(message)
+
+    def _show_error(self, message: str) -> None:
+        self.message.setText(f"<span style='color:#b03a2e'><b>error:</b> {message}</span>")
+        _LOG.error("%s", message)
+        self.error.emit(message)
+
+    def _run_finished(self, summary) -> None:
+        self.workspace.set_measurement(status=summary.status, done=summary.measured)
+        self.patch_label.setText(summary.one_line("simulated" if self._setup.simulated else "session"))
+        self.countdown_label.setText("")
+        self.eta_label.setText("")
+        self.run_finished.emit(summary)
+        if summary.status == "finished":
+            self._load_session()
+
+    def _on_worker_finished(self) -> None:
+        self._close_patch_window()
+        self._set_running(False)
+        self._update_start_label()
+
+    def _close_patch_window(self) -> None:
+        if self._patch_window is not None:
+            self._patch_window.close()
+            self._patch_window = None
+
+    def _load_session(self) -> None:
+        """Read and diagnose the finished session off the GUI thread, then put it into the workspace."""
+        out_dir = self._setup.out_dir
+        loader = CallWorker(lambda: load_path(out_dir), self)
+        loader.done.connect(self._session_loaded)
+        loader.failed.connect(lambda message: self._show_error(f"the session could not be diagnosed: {message}"))
+        loader.finished.connect(lambda: self._loaders.remove(loader))
+        self._loaders.append(loader)
+        loader.start()
+
+    def _session_loaded(self, loaded) -> None:
+        try:
+            self.workspace.apply(loaded)
+        except Exception as error:  # noqa: BLE001 - a view failing must reach the user
+            self._show_error(describe_error(error))
+            return
+        self.session_loaded.emit()

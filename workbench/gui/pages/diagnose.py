@@ -1,0 +1,92 @@
+"""Fit & diagnose: what the diagnosis of the open session found, and how the models fit.
+
+Shows whatever :func:`workbench.diagnostics.diagnose` returned (through
+:mod:`workbench.gui.diagnosis_views`): the verdict (every top-level entry of
+``to_json()``), the findings as cards with their evidence and a plot each,
+per-channel sweep fits with residuals (baseline vs extended), additivity,
+chromaticity vs drive, the white references over time, the validation table
+and the ΔE00 histograms. "Open report" writes the HTML report and opens it.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+from PySide6.QtCore import QUrl, Qt
+from PySide6.QtGui import QDesktopServices
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QPushButton, QSplitter, QVBoxLayout, QWidget
+
+from workbench.gui import diagnosis_views as views
+from workbench.gui.widgets.finding_cards import FindingCards
+from workbench.gui.widgets.fit_plots import FitPlots
+from workbench.gui.widgets.validation_table import ValidationHistogram, ValidationTable
+
+__all__ = ["DiagnosePage"]
+
+
+class DiagnosePage(QWidget):
+    """The diagnosis of the workspace's session; updates on ``diagnosis-changed``."""
+
+    title = "Fit & diagnose"
+
+    def __init__(self, workspace, parent=None):
+        super().__init__(parent)
+        self.workspace = workspace
+        self.summary = QLabel("")
+        self.summary.setWordWrap(True)
+        self.summary.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.report_button = QPushButton("Open report")
+        self.report_button.setToolTip("write the HTML report of this diagnosis and open it in the browser")
+        self.report_button.clicked.connect(self.open_report)
+        self.report_path: Path | None = None
+        self.cards = FindingCards()
+        self.fits = FitPlots()
+        self.table = ValidationTable()
+        self.histogram = ValidationHistogram()
+
+        header = QHBoxLayout()
+        header.addWidget(self.summary, 1)
+        header.addWidget(self.report_button, 0, Qt.AlignmentFlag.AlignTop)
+        right = QSplitter(Qt.Orientation.Vertical)
+        right.addWidget(self.table)
+        right.addWidget(self.histogram)
+        right.setSizes([500, 260])
+        splitter = QSplitter()
+        splitter.addWidget(self.cards)
+        splitter.addWidget(self.fits)
+        splitter.addWidget(right)
+        splitter.setSizes([360, 900, 420])
+        layout = QVBoxLayout(self)
+        layout.addLayout(header)
+        layout.addWidget(splitter, 1)
+        workspace.subscribe("diagnosis-changed", lambda ws: self.show_diagnosis(ws.diagnosis))
+        self.show_diagnosis(workspace.diagnosis)
+
+    def show_diagnosis(self, diagnosis) -> None:
+        self.report_button.setEnabled(diagnosis is not None)
+        self.report_path = None
+        if diagnosis is None:
+            self.summary.setText("<i>No diagnosis yet: run a calibration, or open a session CSV, .ti3, .mat, "
+                                 "measurement directory or profile (File ▸ Open).</i>")
+        else:
+            self.summary.setText("<br>".join(f"<b>{key}</b>: {text}" for key, text in views.summary_lines(diagnosis)))
+        self.cards.show_diagnosis(diagnosis)
+        self.fits.show_diagnosis(diagnosis)
+        self.table.show_diagnosis(diagnosis)
+        self.histogram.show_diagnosis(diagnosis)
+
+    def write_report(self, path=None) -> Path:
+        """Write the HTML report of the current diagnosis (a temporary file by default)."""
+        from workbench.diagnostics.report import write_report
+
+        if path is None:
+            name = Path(self.workspace.diagnosis.session.source).stem or "session"
+            path = Path(tempfile.gettempdir()) / f"vr-workbench-report-{name}.html"
+        self.report_path = write_report(self.workspace.diagnosis, path)
+        return self.report_path
+
+    def open_report(self) -> None:
+        if self.workspace.diagnosis is None:
+            return
+        QDesktopServices.openUrl(QUrl.fromLocalFile(str(self.write_report())))

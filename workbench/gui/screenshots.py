@@ -1,0 +1,95 @@
+"""Render every page of the window to ``DIR/<page>.png`` after a simulated calibration run to the end.
+
+The calibration is the paper's plan on the simulated headset with two
+realistic effects (black offset, channel interaction), at a fast time scale,
+so that every plot has data and the diagnosis finds something. A page whose
+``grab()`` would not show it faithfully (the 3D scene) renders itself with
+``save_screenshot(path)``.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+from PySide6.QtCore import QEventLoop, QTimer
+from PySide6.QtWidgets import QApplication
+
+from workbench.errors import WorkbenchError
+from workbench.gui.main_window import PAGES
+
+__all__ = ["SCREENSHOT_SIZE", "SCREENSHOT_EFFECTS", "run_simulated_calibration", "save_screenshots"]
+
+SCREENSHOT_SIZE = (1800, 1100)
+"""Window size of the screenshots, pixels."""
+
+SCREENSHOT_EFFECTS = {"black-offset": 0.004, "channel-interaction": 0.10}
+"""Headset effects of the simulated calibration the screenshots show."""
+
+_TIMEOUT_S = 300.0
+
+
+def _wait(predicate, timeout_s: float = _TIMEOUT_S, what: str = "") -> None:
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise WorkbenchError(f"timed out after {timeout_s:g} s waiting for {what}")
+        loop = QEventLoop()
+        QTimer.singleShot(20, loop.quit)
+        loop.exec()
+
+
+def run_simulated_calibration(window, out_dir: Path, *, plan: str = "paper", time_scale: float = 0.0,
+                              effects: dict | None = None, seed: int = 2020) -> None:
+    """Run a simulated calibration in ``window`` to the end and wait for its diagnosis."""
+    calibrate = window.pages["calibrate"]
+    form = calibrate.form
+    form.instrument.setCurrentIndex(0)
+    form.display.setCurrentIndex(form.display.findData("simulated"))
+    form.plan.setCurrentIndex(form.plan.findData(plan))
+    form.seed.setValue(seed)
+    form.time_scale.setValue(time_scale)
+    for effect_id, (check, magnitude) in form.effects.items():
+        wanted = (effects if effects is not None else SCREENSHOT_EFFECTS).get(effect_id)
+        check.setChecked(wanted is not None)
+        if wanted is not None:
+            magnitude.setValue(wanted)
+    form.out_dir.setText(str(out_dir))
+    loaded, failed = [], []
+    calibrate.session_loaded.connect(lambda: loaded.append(True))
+    calibrate.error.connect(failed.append)
+    calibrate.start()
+    _wait(lambda: loaded or failed, what="the simulated calibration and its diagnosis")
+    if failed:
+        raise WorkbenchError(f"the simulated calibration failed: {failed[0]}")
+
+
+def save_screenshots(window, directory: Path, *, path=None, time_scale: float | None = None) -> list:
+    """Calibrate (simulated), then write ``directory/<page>.png`` for every page; returns the files."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    window.resize(*SCREENSHOT_SIZE)
+    window.show()
+    QApplication.processEvents()
+    with tempfile.TemporaryDirectory(prefix="vr-workbench-screenshots-") as out_dir:
+        run_simulated_calibration(window, Path(out_dir) / "session", time_scale=time_scale or 0.0)
+        if path:
+            loaded = []
+            window.file_loaded.connect(loaded.append)
+            window.open_path(path)
+            _wait(lambda: loaded, what=f"opening {path}")
+        written = []
+        for key, *_ in PAGES:
+            window.show_page(key)
+            _wait(lambda: True)
+            for _ in range(5):
+                QApplication.processEvents()
+            page = window.pages[key]
+            file = directory / f"{key}.png"
+            if callable(getattr(page, "save_screenshot", None)):
+                page.save_screenshot(file)
+            else:
+                window.grab().save(str(file))
+            written.append(file)
+    return written

@@ -1,0 +1,278 @@
+"""The Calibrate page's setup form: instrument, patch display, plan, output directory.
+
+It produces a :class:`~workbench.gui.calibration_setup.CalibrationSetup` and
+shows, before anything starts, the plan's patch count and its estimated
+instrument time.
+"""
+
+from __future__ import annotations
+
+import secrets
+import tempfile
+from pathlib import Path
+
+from PySide6.QtCore import Signal
+from PySide6.QtGui import QGuiApplication
+from PySide6.QtWidgets import (
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QFormLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QPushButton,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
+)
+
+from instruments.headset import HEADSET_EFFECTS
+from workbench.errors import WorkbenchError
+from workbench.gui.calibration_setup import (
+    DISPLAY_KINDS,
+    SIMULATED,
+    CalibrationSetup,
+    cs2000_ports,
+    plan_estimate,
+    test_tcp_display,
+)
+from workbench.gui.screen_overlay import identify_screens
+from workbench.gui.workers import CallWorker
+from workbench.measurement.runner import format_duration
+
+__all__ = ["CalibrationForm"]
+
+
+class CalibrationForm(QWidget):
+    """The setup of a calibration; :meth:`setup` returns it, :attr:`changed` fires on every edit."""
+
+    changed = Signal()
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self._instrument_group())
+        layout.addWidget(self._display_group())
+        layout.addWidget(self._plan_group())
+        layout.addStretch(1)
+        self._workers: list = []
+        self.changed.connect(self._update_estimate)
+        self._instrument_changed()
+        self._display_changed()
+        self._update_estimate()
+
+    # -- groups -----------------------------------------------------------------------
+    def _instrument_group(self) -> QGroupBox:
+        group = QGroupBox("Instrument")
+        form = QFormLayout(group)
+        row = QHBoxLayout()
+        self.instrument = QComboBox()
+        self.refresh_ports = QPushButton("Find CS-2000")
+        self.refresh_ports.setToolTip("list the serial ports whose USB VID/PID is a CS-2000's (0x132B/0x2104)")
+        row.addWidget(self.instrument, 1)
+        row.addWidget(self.refresh_ports)
+        form.addRow("CS-2000", row)
+        self.effects: dict = {}
+        effects = QWidget()
+        grid = QFormLayout(effects)
+        grid.setContentsMargins(0, 0, 0, 0)
+        for effect_id, spec in HEADSET_EFFECTS.items():
+            check = QCheckBox(effect_id)
+            check.setToolTip(spec.summary)
+            magnitude = QDoubleSpinBox(decimals=3, singleStep=spec.default / 4 or 0.001)
+            magnitude.setRange(spec.limits[0], spec.limits[1] - 1e-6)
+            magnitude.setValue(spec.default)
+            magnitude.setToolTip(spec.magnitude)
+            check.toggled.connect(self.changed)
+            magnitude.valueChanged.connect(self.changed)
+            grid.addRow(check, magnitude)
+            self.effects[effect_id] = (check, magnitude)
+        self.effects_box = effects
+        form.addRow("simulated effects", effects)
+        self.time_scale = QDoubleSpinBox(decimals=4, singleStep=0.01)
+        self.time_scale.setRange(0.0, 1.0)
+        self.time_scale.setValue(0.01)
+        self.time_scale.setToolTip("fraction of the real instrument timing the emulator waits (1 = real)")
+        form.addRow("time scale", self.time_scale)
+        self.refresh_ports.clicked.connect(self.find_ports)
+        self.instrument.currentIndexChanged.connect(self._instrument_changed)
+        self.find_ports()
+        return group
+
+    def _display_group(self) -> QGroupBox:
+        group = QGroupBox("Patch display")
+        form = QFormLayout(group)
+        self.display = QComboBox()
+        for kind, name in DISPLAY_KINDS.items():
+            self.display.addItem(name, kind)
+        form.addRow("show patches on", self.display)
+        row = QHBoxLayout()
+        self.screen = QComboBox()
+        for i, screen in enumerate(QGuiApplication.screens()):
+            geometry = screen.geometry()
+            self.screen.addItem(f"{i}: {screen.name()} {geometry.width()}×{geometry.height()}", i)
+        self.screen.setCurrentIndex(self.screen.count() - 1)
+        self.identify = QPushButton("Identify screens")
+        self.identify.setToolTip("show each screen's number on it for a few seconds")
+        self.identify.clicked.connect(lambda: identify_screens(self))
+        row.addWidget(self.screen, 1)
+        row.addWidget(self.identify)
+        form.addRow("screen", row)
+        row = QHBoxLayout()
+        self.tcp = QLineEdit("127.0.0.1:47800")
+        self.test_tcp = QPushButton("Test connection")
+        self.test_tcp.clicked.connect(self.test_connection)
+        row.addWidget(self.tcp, 1)
+        row.addWidget(self.test_tcp)
+        form.addRow("patch server", row)
+        self.tcp_status = QLabel("")
+        self.tcp_status.setWordWrap(True)
+        form.addRow("", self.tcp_status)
+        self.display.currentIndexChanged.connect(self._display_changed)
+        return group
+
+    def _plan_group(self) -> QGroupBox:
+        group = QGroupBox("Plan and output")
+        form = QFormLayout(group)
+        self.plan = QComboBox()
+        self.plan.addItem("paper (214 patches, as in the paper)", "paper")
+        self.plan.addItem("quick (28 patches)", "quick")
+        self.plan.addItem("from a file…", "file")
+        form.addRow("plan", self.plan)
+        row = QHBoxLayout()
+        self.plan_file = QLineEdit()
+        self.plan_file.setPlaceholderText("CSV with columns kind,r,g,b")
+        browse = QPushButton("…")
+        browse.clicked.connect(self._choose_plan_file)
+        row.addWidget(self.plan_file, 1)
+        row.addWidget(browse)
+        form.addRow("plan file", row)
+        self.seed = QSpinBox()
+        self.seed.setRange(0, 2**31 - 1)
+        self.seed.setValue(secrets.randbelow(2**31))
+        self.seed.setToolTip("seeds the validation colours (and the simulated instrument's noise)")
+        form.addRow("seed", self.seed)
+        self.estimate = QLabel("")
+        self.estimate.setWordWrap(True)
+        form.addRow("estimate", self.estimate)
+        row = QHBoxLayout()
+        self.out_dir = QLineEdit(str(Path(tempfile.gettempdir()) / "vr-workbench-calibration"))
+        out_browse = QPushButton("…")
+        out_browse.clicked.connect(self._choose_out_dir)
+        row.addWidget(self.out_dir, 1)
+        row.addWidget(out_browse)
+        form.addRow("output directory", row)
+        for signal in (self.plan.currentIndexChanged, self.plan_file.textChanged, self.seed.valueChanged,
+                       self.out_dir.textChanged, self.time_scale.valueChanged, self.instrument.currentIndexChanged,
+                       self.display.currentIndexChanged):
+            signal.connect(self.changed)
+        return group
+
+    # -- behaviour --------------------------------------------------------------------
+    def find_ports(self) -> None:
+        """Refill the instrument list: the simulation, each CS-2000 found by VID/PID, and auto."""
+        current = self.instrument.currentData()
+        self.instrument.blockSignals(True)
+        self.instrument.clear()
+        self.instrument.addItem("simulated CS-2000 (emulator on a pty)", SIMULATED)
+        for device, description in cs2000_ports():
+            self.instrument.addItem(f"CS-2000 on {device} ({description})", device)
+        self.instrument.addItem("auto (the one CS-2000 connected by USB)", "auto")
+        index = self.instrument.findData(current)
+        self.instrument.setCurrentIndex(max(index, 0))
+        self.instrument.blockSignals(False)
+        self._instrument_changed()
+
+    def _instrument_changed(self) -> None:
+        simulated = self.instrument.currentData() == SIMULATED
+        self.effects_box.setEnabled(simulated)
+        self.time_scale.setEnabled(simulated)
+        simulated_display = self.display.model().item(0) if hasattr(self, "display") else None
+        if simulated_display is not None:
+            simulated_display.setEnabled(simulated)
+            if not simulated and self.display.currentData() == "simulated":
+                self.display.setCurrentIndex(1)
+
+    def _display_changed(self) -> None:
+        kind = self.display.currentData()
+        self.screen.setEnabled(kind == "window")
+        self.identify.setEnabled(kind == "window")
+        self.tcp.setEnabled(kind == "tcp")
+        self.test_tcp.setEnabled(kind == "tcp")
+
+    def _choose_plan_file(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Plan file", "", "CSV plan (*.csv)")
+        if path:
+            self.plan_file.setText(path)
+            self.plan.setCurrentIndex(self.plan.findData("file"))
+
+    def _choose_out_dir(self) -> None:
+        path = QFileDialog.getExistingDirectory(self, "Output directory", self.out_dir.text())
+        if path:
+            self.out_dir.setText(path)
+
+    def tcp_address(self) -> tuple:
+        host, _, port = self.tcp.text().strip().rpartition(":")
+        if not host or not port.isdigit() or not 0 < int(port) < 65536:
+            raise WorkbenchError(f"patch server {self.tcp.text()!r} is not HOST:PORT (e.g. 127.0.0.1:47800)")
+        return host, int(port)
+
+    def test_connection(self) -> None:
+        """Say hello to the patch server off the GUI thread; the label says what answered."""
+        try:
+            host, port = self.tcp_address()
+        except WorkbenchError as error:
+            self.tcp_status.setText(f"✗ {error}")
+            return
+        self.tcp_status.setText(f"connecting to {host}:{port}…")
+        worker = CallWorker(lambda: test_tcp_display(host, port))
+        worker.done.connect(lambda name: self.tcp_status.setText(f"✓ connected: {name}"))
+        worker.failed.connect(lambda message: self.tcp_status.setText(f"✗ {message}"))
+        worker.finished.connect(lambda: self._workers.remove(worker))
+        self._workers.append(worker)
+        worker.start()
+
+    def stop_workers(self) -> None:
+        """Wait for the connection test, if one runs (teardown)."""
+        for worker in list(self._workers):
+            worker.wait()
+
+    def setup(self, **changes) -> CalibrationSetup:
+        """The calibration the form describes (``changes`` override fields, e.g. ``remeasure``).
+
+        Raises
+        ------
+        WorkbenchError
+            If the form is incomplete or inconsistent; the message says what to fix.
+        """
+        simulated = self.instrument.currentData() == SIMULATED
+        kind = self.display.currentData()
+        fields = dict(
+            out_dir=Path(self.out_dir.text().strip() or "."),
+            instrument=self.instrument.currentData(),
+            effects={k: m.value() for k, (c, m) in self.effects.items() if c.isChecked()} if simulated else {},
+            time_scale=self.time_scale.value() if simulated else 0.0,
+            display=kind,
+            screen=self.screen.currentData() if kind == "window" else None,
+            tcp_address=self.tcp_address() if kind == "tcp" else None,
+            plan_name=self.plan.currentData(),
+            plan_file=Path(self.plan_file.text()) if self.plan.currentData() == "file" else None,
+            seed=self.seed.value(),
+        )
+        fields.update(changes)
+        return CalibrationSetup(**fields)
+
+    def _update_estimate(self) -> None:
+        try:
+            setup = self.setup()
+            estimate = plan_estimate(setup.plan(), setup.effects)
+        except WorkbenchError as error:
+            self.estimate.setText(f"<span style='color:#b03a2e'>{error}</span>")
+            return
+        kinds = ", ".join(f"{n} {k}" for k, n in estimate.counts.items())
+        self.estimate.setText(f"<b>{estimate.patches} patches</b> ({kinds}); instrument time about "
+                              f"<b>{format_duration(estimate.instrument_s)}</b> (dark patches take longest)")

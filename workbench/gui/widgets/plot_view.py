@@ -1,0 +1,99 @@
+"""A pyqtgraph plot that shows a :class:`~workbench.gui.diagnosis_views.PlotView`, updated in place.
+
+Curves are created once, on the first view that needs them, and later views
+only ``setData`` them; pens and brushes are made once per colour.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtGui import QColor
+
+__all__ = ["PALETTE", "pen", "brush", "ViewPlot", "configure_plot"]
+
+PALETTE = ("#c0392b", "#27ae60", "#2e6fd0", "#555555", "#e67e22", "#8e44ad")
+"""Colours by index: red, green, blue channels, grey, then two more."""
+
+_PENS: dict = {}
+_BRUSHES: dict = {}
+
+
+def pen(index: int, width: float = 1.6, dashed: bool = False):
+    """A cached pen of palette colour ``index``."""
+    key = (index, width, dashed)
+    if key not in _PENS:
+        from PySide6.QtCore import Qt
+
+        _PENS[key] = pg.mkPen(PALETTE[index % len(PALETTE)], width=width,
+                              style=Qt.PenStyle.DashLine if dashed else Qt.PenStyle.SolidLine)
+    return _PENS[key]
+
+
+def brush(index: int, alpha: int = 255):
+    """A cached brush of palette colour ``index``."""
+    key = (index, alpha)
+    if key not in _BRUSHES:
+        colour = QColor(PALETTE[index % len(PALETTE)])
+        colour.setAlpha(alpha)
+        _BRUSHES[key] = pg.mkBrush(colour)
+    return _BRUSHES[key]
+
+
+def configure_plot(plot: pg.PlotItem, title: str, x_label: str, y_label: str) -> None:
+    """Title and axis labels (with units) in a readable size, a light grid."""
+    plot.setTitle(title, size="10pt")
+    plot.setLabel("bottom", x_label)
+    plot.setLabel("left", y_label)
+    plot.showGrid(x=True, y=True, alpha=0.25)
+    for side in ("bottom", "left"):
+        plot.getAxis(side).label.setFont(pg.QtGui.QFont("", 9))
+
+
+class ViewPlot(pg.PlotWidget):
+    """Shows one :class:`PlotView` at a time; a new view re-uses the curves of the last."""
+
+    def __init__(self, parent=None, legend: bool = True):
+        super().__init__(parent, background="w")
+        self.setMinimumSize(220, 170)
+        self._curves: list = []
+        self._legend = self.getPlotItem().addLegend(offset=(5, 5), labelTextSize="8pt") if legend else None
+        self._empty = pg.TextItem("", color="#777", anchor=(0.5, 0.5))
+        self.getPlotItem().addItem(self._empty, ignoreBounds=True)
+
+    def _curve(self, i: int):
+        while len(self._curves) <= i:
+            curve = self.getPlotItem().plot([], [])
+            self._curves.append(curve)
+        return self._curves[i]
+
+    def show_view(self, view, empty_text: str = "no data") -> None:
+        """Draw ``view`` (or clear the plot and say ``empty_text`` when it is None)."""
+        plot = self.getPlotItem()
+        if view is None:
+            for curve in self._curves:
+                curve.setData([], [])
+            self._empty.setText(empty_text)
+            self._empty.setPos(0.5, 0.5)
+            plot.setXRange(0, 1)
+            plot.setYRange(0, 1)
+            if self._legend is not None:
+                self._legend.clear()
+            return
+        self._empty.setText("")
+        configure_plot(plot, view.title, view.x_label, view.y_label)
+        if self._legend is not None:
+            self._legend.clear()
+        for i, series in enumerate(view.series):
+            curve = self._curve(i)
+            x, y = np.asarray(series.x, float), np.asarray(series.y, float)
+            if series.points:
+                curve.setData(x, y, pen=None, symbol="o", symbolSize=5, symbolPen=pen(series.colour, 1),
+                              symbolBrush=brush(series.colour, 110))
+            else:
+                curve.setData(x, y, pen=pen(series.colour, 1.8, dashed=series.colour == 3), symbol=None)
+            if self._legend is not None:
+                self._legend.addItem(curve, series.name)
+        for curve in self._curves[len(view.series):]:
+            curve.setData([], [])
+        plot.enableAutoRange()
