@@ -11,6 +11,7 @@ from workbench.apl.curve import AplCurve, estimate_transfer, fit_apl_curve, load
 from workbench.apl.detector import AplDependenceTest, detect_apl_dependence
 from workbench.apl.holdout import AplHoldout, AplHoldoutFold, apl_fold_labels, evaluate_apl_holdout
 from workbench.apl.load import ChannelTransfer, channel_transfer, frame_load, reference_load
+from workbench.apl.predict import PredictRows, apl_curve_from_json, predict_XYZ_on_surround, read_predict_rows
 
 __all__ = [
     "AplCurve",
@@ -18,6 +19,10 @@ __all__ = [
     "AplHoldout",
     "AplHoldoutFold",
     "ChannelTransfer",
+    "PredictRows",
+    "apl_curve_from_json",
+    "predict_XYZ_on_surround",
+    "read_predict_rows",
     "apl_fold_labels",
     "channel_transfer",
     "detect_apl_dependence",
