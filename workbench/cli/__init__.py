@@ -28,6 +28,7 @@ COMMAND_MODULES = (
     "workbench.cli.diagnose",
     "workbench.cli.measure",
     "workbench.cli.ishihara",
+    "workbench.cli.export",
     "workbench.cli.gui",
 )
 
