@@ -1,7 +1,8 @@
 """Patch displays: where the measurement sequence puts its colour patches.
 
-A patch display shows one full-field patch of 8-bit DAC values at a time
-(:class:`PatchDisplay`). Three are here: the simulated headset
+A patch display shows one patch of 8-bit DAC values at a time
+(:class:`PatchDisplay`): full field, or as a centred window on a surround
+(an APL patch, for displays whose output depends on the rest of the picture). Three are here: the simulated headset
 (:class:`SimulatedPatchDisplay`), a VR application reached over TCP
 (:class:`TcpPatchDisplay`), and a mirror that shows each patch on several
 displays (:class:`MirroredPatchDisplay`). The full-screen Qt window lives in
@@ -31,13 +32,27 @@ Requests and replies
         presented**: the whole field of view of both eyes, these exact integer
         values 0..255 written to the frame buffer (no tone mapping, no
         post-processing, no sRGB encoding by the engine, no dithering).
+    ``{"cmd": "show", "id": 3, "rgb": [255, 255, 255], "window": 0.1, "surround": [64, 64, 64]}``
+        → ``{"ok": true, "id": 3}``: an **APL patch**. Optional fields:
+        ``window``, a number in (0, 1], the fraction of the field of view the
+        patch covers (a centred rectangle of the field's aspect ratio, its
+        sides scaled by ``sqrt(window)``, the same in both eyes; the instrument
+        aims at its centre), default 1 (full field); ``surround``, three
+        integers 0..255, the DAC values of the rest of the field, default
+        ``[0, 0, 0]``. The client sends them only for a patch that is not full
+        field.
     ``{"cmd": "bye", "id": 3}``
         → ``{"ok": true, "id": 3}``; then the server closes the connection (and
         may go back to its own picture).
 Errors
     ``{"ok": false, "id": N, "error": "<what was wrong>"}`` for an unknown
-    ``cmd``, a malformed ``rgb``, or a patch that could not be shown; a line
-    that is not JSON gets ``"id": null``. The connection stays open.
+    ``cmd``, a malformed ``rgb``, ``window`` or ``surround``, a field the
+    server does not know (the error names it: ``unknown field 'window'``),
+    or a patch that could not be shown; a line that is not JSON gets
+    ``"id": null``. The connection stays open. A server that cannot show APL
+    patches answers such a ``show`` with ``ok: false`` naming the field, and
+    the client reports that the display cannot show APL patches
+    (:class:`AplPatchesUnsupported`).
 Timeouts
     The client waits at most ``timeout_s`` to connect and for each reply, then
     reports which request went unanswered; the server drops a client that has
@@ -76,7 +91,12 @@ __all__ = [
     "MirroredPatchDisplay",
     "TcpPatchDisplay",
     "validate_patch_rgb",
+    "validate_patch_window",
+    "AplPatchesUnsupported",
+    "SHOW_FIELDS",
     "encode_message",
+    "is_apl_patch",
+    "show_patch",
     "LineReader",
 ]
 
@@ -93,16 +113,38 @@ class PatchDisplayError(RuntimeError):
     """A patch could not be shown; the message names the display, the request and the fix."""
 
 
+class AplPatchesUnsupported(PatchDisplayError):
+    """The display cannot show a patch as a window on a surround (an APL patch)."""
+
+
+SHOW_FIELDS = ("cmd", "id", "rgb", "window", "surround")
+"""Fields a ``show`` request may carry; a server answers any other with ``ok: false`` naming it."""
+
+
 class _ConnectionDropped(PatchDisplayError):
     """The patch server closed (or reset) the connection."""
 
 
+class _Refused(PatchDisplayError):
+    """The patch server answered ``ok: false``; ``server_error`` is its reason."""
+
+    def __init__(self, message: str, server_error: str):
+        super().__init__(message)
+        self.server_error = server_error
+
+
 @runtime_checkable
 class PatchDisplay(Protocol):
-    """Something that shows one full-field patch of DAC values at a time, and names itself."""
+    """Something that shows one patch of DAC values at a time, and names itself.
 
-    def show(self, rgb_dac) -> None:
-        """Show the patch ``rgb_dac`` (three integers 0..255); return once it is on screen."""
+    ``show`` takes ``window`` and ``surround`` only for APL patches (a patch
+    that is not full field), so a display that shows full-field patches only
+    may take ``rgb_dac`` alone.
+    """
+
+    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
+        """Show the patch ``rgb_dac`` (three integers 0..255) as ``window`` of the field on
+        ``surround``; return once it is on screen."""
 
     def close(self) -> None:
         """Release the display (idempotent)."""
@@ -124,6 +166,34 @@ def validate_patch_rgb(rgb_dac) -> list[int]:
             or np.any((as_float < 0) | (as_float > 255)):
         raise ValueError(f"patch rgb {rgb_dac!r} must be integers 0..255 (8-bit DAC values)")
     return [int(v) for v in as_float]
+
+
+def validate_patch_window(window) -> float:
+    """Return ``window`` as a float in (0, 1], or raise ``ValueError`` naming the bad value."""
+    try:
+        value = float(window)
+    except (TypeError, ValueError):
+        raise ValueError(f"patch window {window!r} must be a number in (0, 1]") from None
+    if isinstance(window, bool) or not np.isfinite(value) or not 0 < value <= 1:
+        raise ValueError(f"patch window {window!r} must be a number in (0, 1] (the fraction of the field)")
+    return value
+
+
+def is_apl_patch(window: float = 1.0, surround=(0, 0, 0)) -> bool:
+    """Whether a patch is an APL patch (not full field); a surround behind a full field is invisible."""
+    return validate_patch_window(window) < 1.0
+
+
+def show_patch(display, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
+    """``display.show`` with ``window``/``surround`` passed only for an APL patch.
+
+    So that displays which show full-field patches only (``show(rgb)``) keep
+    working for every plan without APL patches.
+    """
+    if is_apl_patch(window, surround):
+        display.show(rgb_dac, window=window, surround=surround)
+    else:
+        display.show(rgb_dac)
 
 
 def encode_message(message: dict) -> bytes:
@@ -189,9 +259,13 @@ class SimulatedPatchDisplay:
     def __init__(self, headset):
         self.headset = headset
 
-    def show(self, rgb_dac) -> None:
-        """Put ``rgb_dac`` on the simulated headset (at once)."""
-        self.headset.show(validate_patch_rgb(rgb_dac))
+    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
+        """Put ``rgb_dac`` on the simulated headset (at once), as ``window`` on ``surround``."""
+        rgb = validate_patch_rgb(rgb_dac)
+        if is_apl_patch(window, surround):
+            self.headset.show(rgb, window=validate_patch_window(window), surround=validate_patch_rgb(surround))
+        else:
+            self.headset.show(rgb)
 
     def close(self) -> None:
         """Nothing to release."""
@@ -214,10 +288,10 @@ class MirroredPatchDisplay:
             raise ValueError("MirroredPatchDisplay needs at least one display")
         self.displays = displays
 
-    def show(self, rgb_dac) -> None:
-        """Show ``rgb_dac`` on each display in turn."""
+    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
+        """Show ``rgb_dac`` (as ``window`` on ``surround``) on each display in turn."""
         for display in self.displays:
-            display.show(rgb_dac)
+            show_patch(display, rgb_dac, window, surround)
 
     def close(self) -> None:
         """Close every display."""
@@ -336,20 +410,45 @@ class TcpPatchDisplay:
                 f"replies must carry the request's id, in order ({PATCH_PROTOCOL})"
             )
         if reply.get("ok") is not True:
-            raise PatchDisplayError(
+            reason = str(reply.get("error", "no reason given"))
+            raise _Refused(
                 f"the patch server at {self.where} refused {message['cmd']!r} {message.get('rgb', '')}: "
-                f"{reply.get('error', 'no reason given')}"
+                f"{reason}", reason
             )
         return reply
 
-    def show(self, rgb_dac) -> None:
+    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
         """Show ``rgb_dac`` and return once the server says the frame is presented.
 
+        An APL patch (``window`` < 1) is sent with the optional ``window`` and
+        ``surround`` fields; a full-field patch without them, exactly as before.
         If the server has dropped the connection (its idle timeout passed while
         the instrument measured or the run was paused), connect again, say
         ``hello`` again and repeat the ``show``, once.
+
+        Raises
+        ------
+        AplPatchesUnsupported
+            When the server refuses an APL patch naming ``window`` or ``surround``.
         """
         request = {"cmd": "show", "rgb": validate_patch_rgb(rgb_dac)}
+        if is_apl_patch(window, surround):
+            request.update(window=validate_patch_window(window), surround=validate_patch_rgb(surround))
+            try:
+                self._show(request)
+            except _Refused as error:
+                if not any(field in error.server_error for field in ("window", "surround")):
+                    raise
+                raise AplPatchesUnsupported(
+                    f"the display at {self.where} cannot show APL patches (a patch as a window on a "
+                    f"surround): {error}. Update the VR application's patch server to accept the optional "
+                    f"'window' and 'surround' fields of {PATCH_PROTOCOL} (see the README), or measure a "
+                    "plan without APL patches (e.g. --plan paper)"
+                ) from error
+            return
+        self._show(request)
+
+    def _show(self, request: dict) -> None:
         if self._closed:
             raise PatchDisplayError(f"the patch display {self.where} has been closed")
         if self._sock is None:  # an earlier reconnection failed: try again

@@ -9,7 +9,13 @@ Here the "headset" is a callable, ``present(rgb)``: the command line forwards
 the patches to a :class:`instruments.headset.SimulatedHeadset` and logs what it
 emits; tests pass the ``show`` of their own simulated headset. In a game engine
 ``present`` sets the colour of a full-screen unlit quad in front of both eyes,
-waits until the compositor has presented that frame, and returns.
+waits until the compositor has presented that frame, and returns. An APL patch
+(``window`` < 1) is handed over as ``present(rgb, window=w, surround=[r, g, b])``:
+the engine fills the field with the surround and draws the patch as a centred
+rectangle of the field's aspect ratio whose sides are ``sqrt(w)`` of the
+field's. A server built with ``apl_patches=False`` stands for one that does not
+know those fields: it refuses them by name, as every server must refuse a
+field it does not know.
 
 Run it with::
 
@@ -29,9 +35,11 @@ from typing import Callable
 
 from instruments.patch_display import (
     PATCH_PROTOCOL,
+    SHOW_FIELDS,
     LineReader,
     encode_message,
     validate_patch_rgb,
+    validate_patch_window,
 )
 
 __all__ = ["PatchServer", "main"]
@@ -92,6 +100,10 @@ class PatchServer(socketserver.TCPServer):
         A client silent this long is dropped. The workbench is silent while the
         CS-2000 measures (up to ~4 min per dark patch, twice with an ND retry)
         and while a run is paused, hence the 10-minute default.
+    apl_patches : bool
+        Accept the optional ``window`` and ``surround`` fields of ``show``
+        (``present`` must then take them as keywords); ``False`` answers them
+        as unknown fields, like a server written before they existed.
 
     Examples
     --------
@@ -113,8 +125,10 @@ class PatchServer(socketserver.TCPServer):
         *,
         display_name: str = "reference patch server",
         idle_timeout_s: float = 600.0,
+        apl_patches: bool = True,
     ):
         self.present = present
+        self.apl_patches = bool(apl_patches)
         self.display_name = display_name
         self.idle_timeout_s = float(idle_timeout_s)
         self.closing = threading.Event()
@@ -144,12 +158,22 @@ class PatchServer(socketserver.TCPServer):
             return {"ok": True, "id": request_id, "protocol": PATCH_PROTOCOL,
                     "display": self.display_name}, False
         if command == "show":
+            known = SHOW_FIELDS if self.apl_patches else ("cmd", "id", "rgb")
+            unknown = [name for name in request if name not in known]
+            if unknown:
+                return {"ok": False, "id": request_id,
+                        "error": f"unknown field {unknown[0]!r} in show; this server knows {', '.join(known)}"}, False
             try:
                 rgb = validate_patch_rgb(request.get("rgb"))
+                window = validate_patch_window(request.get("window", 1.0))
+                surround = validate_patch_rgb(request.get("surround", [0, 0, 0]))
             except ValueError as error:
                 return {"ok": False, "id": request_id, "error": str(error)}, False
             try:
-                self.present(rgb)
+                if window < 1.0:
+                    self.present(rgb, window=window, surround=surround)
+                else:
+                    self.present(rgb)
             except Exception as error:  # reported to the client, which decides
                 _LOG.warning("could not present patch %s: %s", rgb, error)
                 return {"ok": False, "id": request_id, "error": f"could not present {rgb}: {error}"}, False
@@ -200,10 +224,11 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     headset = SimulatedHeadset()
 
-    def present(rgb: list) -> None:
-        headset.show(rgb)
+    def present(rgb: list, window: float = 1.0, surround=(0, 0, 0)) -> None:
+        headset.show(rgb, window=window, surround=surround)
         _, Y, _ = radiance_to_XYZ(headset.current_radiance())
-        _LOG.info("showing %s: %.4g cd/m²", rgb, Y)
+        frame = "" if window >= 1 else f" as {window:g} of the field on {list(surround)}"
+        _LOG.info("showing %s%s: %.4g cd/m²", rgb, frame, Y)
 
     try:
         server = PatchServer(present, args.host, args.port, display_name=headset.describe(),
