@@ -29,10 +29,15 @@ def register(subparsers) -> None:
     parser.set_defaults(handler=_diagnose)
 
     predict = subparsers.add_parser(
-        "predict", help="XYZ a profile predicts for DAC values (CSV r,g,b on stdin)",
+        "predict", help="XYZ a profile predicts for DAC values (CSV r,g,b on stdin), or --inverse",
         description="Read CSV r,g,b (0..255, optional header) on standard input; write CSV "
-                    "X,Y,Z on standard output, as the profile's display model predicts.")
+                    "X,Y,Z on standard output, as the profile's display model predicts. With "
+                    "--inverse, read X,Y,Z (the profile's scale) and write the float DAC r,g,b "
+                    "of the display inverse (the function display_inverse.cube samples; out of "
+                    "gamut: clipped per channel, counted on standard error).")
     predict.add_argument("profile", help="a .vrprofile.json")
+    predict.add_argument("--inverse", action="store_true",
+                         help="CSV X,Y,Z in, CSV r,g,b (DAC 0..255, float) out")
     predict.set_defaults(handler=_predict)
 
 
@@ -112,10 +117,8 @@ def _diagnose(args) -> int:
     return 0
 
 
-def _predict(args) -> int:
-    from workbench.profile import load_profile
-
-    model = load_profile(args.profile).display_model()
+def _read_triplets(what: str, example: str) -> np.ndarray:
+    """CSV rows of three finite numbers on standard input (a header line is skipped)."""
     rows = []
     for number, row in enumerate(csv.reader(io.StringIO(sys.stdin.read())), start=1):
         cells = [cell.strip() for cell in row]
@@ -126,16 +129,38 @@ def _predict(args) -> int:
         except ValueError:
             if number == 1:
                 continue  # header
-            raise InputError(f"stdin line {number}: {row!r} is not r,g,b numbers; "
-                             "give one DAC triplet (0..255) per line") from None
+            raise InputError(f"stdin line {number}: {row!r} is not {what} numbers; "
+                             f"give one triplet per line, e.g. {example}") from None
         if len(values) != 3:
-            raise InputError(f"stdin line {number}: need 3 values r,g,b, got {len(values)}")
+            raise InputError(f"stdin line {number}: need 3 values {what}, got {len(values)}")
+        if not all(np.isfinite(values)):
+            raise InputError(f"stdin line {number}: {row!r} holds NaN or infinity; give finite "
+                             f"{what} values")
         rows.append(values)
     if not rows:
-        raise InputError("no r,g,b rows on standard input; e.g. echo 255,128,0 | "
-                         "python -m workbench predict PROFILE")
-    XYZ = model.forward(np.array(rows))
+        raise InputError(f"no {what} rows on standard input; e.g. echo {example} | "
+                         "python -m workbench predict PROFILE" + (" --inverse" if what == "X,Y,Z"
+                                                                 else ""))
+    return np.array(rows)
+
+
+def _predict(args) -> int:
+    from workbench.profile import load_profile
+
+    model = load_profile(args.profile).display_model()
     writer = csv.writer(sys.stdout, lineterminator="\n")
+    if args.inverse:
+        XYZ = _read_triplets("X,Y,Z", "40,42,45")
+        dac = model.inverse(XYZ)
+        clipped = int(np.count_nonzero(~model.in_gamut(XYZ)))
+        writer.writerow(["r", "g", "b"])
+        for value in dac:
+            writer.writerow([f"{v:.4f}" for v in value])
+        if clipped:
+            print(f"{clipped} of {len(XYZ)} colour(s) outside the display gamut: clipped per "
+                  "channel in linear drive", file=sys.stderr)
+        return 0
+    XYZ = model.forward(_read_triplets("r,g,b", "255,128,0"))
     writer.writerow(["X", "Y", "Z"])
     for value in XYZ:
         writer.writerow([f"{v:.6g}" for v in value])
