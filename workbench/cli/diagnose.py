@@ -57,11 +57,27 @@ def export_profile(diagnosis, path) -> Path:
     return save_profile(profile, path)
 
 
+def _finding_line(i, finding) -> str:
+    z = finding["z"]
+    parts = [f"z {z:.1f}" if z is not None else "", f"impact {finding['impact_dE00']:.2f} ΔE00"
+             if finding["impact_dE00"] is not None else ""]
+    figures = ", ".join(p for p in parts if p)
+    return f"finding {i} {finding['effect']} ({figures}; score {finding['score']:.1f}): {finding['evidence']}"
+
+
 def _print_text(diagnosis) -> None:
     result = diagnosis.to_json()
     base, ext = result["baseline"], result["extended"]
     print(f"session {result['session']['source']}: {result['session']['measurements']} "
           f"measurements, {result['session']['validation']} held out for validation")
+    print(f"noise     {result['noise']['summary']}")
+    significance = result["significance"]
+    print(f"tests     a finding needs z above {_critical(result):.2f} (family-wise false-finding "
+          f"rate {100 * significance['family_alpha']:.0f} %, {significance['method']}) and an "
+          f"impact of at least {significance['materiality_floor_dE00']:g} mean ΔE00 on a "
+          f"{significance['materiality_colours']}")
+    for note in result["untested"]:
+        print(f"untested  {note['effect']}: {note['reason']}")
 
     def figures(block):
         v = block["validation"]
@@ -75,13 +91,20 @@ def _print_text(diagnosis) -> None:
     attribution = result["attribution"]
     contributions = ({t["effect"]: t for t in attribution["terms"]} if attribution else {})
     for i, finding in enumerate(result["findings"], start=1):
-        print(f"finding {i} {finding['effect']} (score {finding['score']:.1f}): {finding['evidence']}")
-        term = terms[finding["effect"]]
-        line = f"          → {term['term']}, fitted on {term['fitted_on']}"
-        if finding["effect"] in contributions:
-            line += (f"; without it held-out mean ΔE00 would be "
-                     f"{contributions[finding['effect']]['mean_dE00_without']:.2f}")
-        print(line)
+        print(_finding_line(i, finding))
+        if finding["effect"] in terms:
+            term = terms[finding["effect"]]
+            line = f"          → {term['term']}, fitted on {term['fitted_on']}"
+            if finding["effect"] in contributions:
+                line += (f"; without it held-out mean ΔE00 would be "
+                         f"{contributions[finding['effect']]['mean_dE00_without']:.2f}")
+            print(line)
+        elif finding["cross_validation"]:
+            print(f"          → {finding['cross_validation']}")
+    near = [c for c in result["checked"] if c["testable"] and c["significant"]]
+    for check in near:
+        print(f"not material  {check['effect']} (z {check['z']:.1f}, impact "
+              f"{check['impact_dE00']:.3f} ΔE00 below the floor): {check['evidence']}")
     print(f"extended  {ext['model']}: {figures(ext)}  [{ext['protocol']}]")
     if attribution:
         print(f"refit     the extension's fitting with no term: ΔE00 mean "
@@ -94,6 +117,13 @@ def _print_text(diagnosis) -> None:
     if gain is not None:
         print(f"gain      mean ΔE00 reduced by {gain:.0f} % on colours neither model was fitted on")
     print("(CIEDE2000 in CIELAB whose white is the measured display white)")
+
+
+def _critical(result) -> float:
+    values = [f["critical_z"] for f in result["findings"] + result["checked"]
+              if f["testable"] and f["effect"] != "unexplained-residual"
+              and f["critical_z"] is not None]
+    return values[0] if values else float("nan")
 
 
 def _diagnose(args) -> int:

@@ -1,13 +1,19 @@
 """Diagnostics: what the paper's display model gets wrong, why, and how much an extension gains.
 
-:func:`diagnose` runs one detector per effect of the vocabulary (design §5,
-:data:`DETECTORS`), extends the model with exactly the terms found, and scores
-baseline and extension on the validation colours neither was fitted on.
+:func:`diagnose` estimates the session's noise, runs one test per effect of
+the vocabulary (design §5, :data:`DETECTORS`), names the effects that are
+significant over all detectors together and material on a fixed colour set,
+extends the model with the terms that improve a cross-validated prediction
+of the fit rows, and scores baseline and extension on the validation colours
+neither was fitted on.
 """
 
-from workbench.diagnostics.detectors import DETECTORS, THRESHOLDS, DetectorResult
+from workbench.diagnostics.detectors import DETECTORS, DetectorResult
 from workbench.diagnostics.extension import TERMS, fit_extended
+from workbench.diagnostics.noise import NoiseModel, estimate_noise
 from workbench.diagnostics.selection import Diagnosis, ValidationScore, diagnose
+from workbench.diagnostics.significance import FAMILY_ALPHA, MATERIALITY_FLOOR_DE00
 
-__all__ = ["DETECTORS", "THRESHOLDS", "TERMS", "DetectorResult", "Diagnosis",
-           "ValidationScore", "diagnose", "fit_extended"]
+__all__ = ["DETECTORS", "TERMS", "DetectorResult", "Diagnosis", "FAMILY_ALPHA",
+           "MATERIALITY_FLOOR_DE00", "NoiseModel", "ValidationScore", "diagnose",
+           "estimate_noise", "fit_extended"]

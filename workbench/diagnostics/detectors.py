@@ -1,40 +1,74 @@
-"""Effect detectors: one per effect id of the diagnostics vocabulary (design §5).
+"""Effect detectors: one per effect id of the diagnostics vocabulary (design §5), each a test.
 
-Each detector computes a statistic from the rows a model may be fitted on and
-compares it with a threshold. Thresholds were set on simulated clean sessions
-(the simulated headset measured with the CS-2000 emulator's noise model plus
-0.1 % repeatability) so that a clean session gives a false finding in at most
-5 % of sessions; the realistic magnitudes of each effect lie well above them
-(see ``tests/test_diagnostics.py``, which checks both sides). A result's
-``score`` is the statistic over its threshold: how far beyond noise the
-evidence is, the quantity findings are ordered by.
+Every detector reads the rows a model may be fitted on and returns a
+statistic, its standard error propagated from the session's noise model
+(:mod:`workbench.diagnostics.noise`), and the p-value of a test of "the
+paper's model holds for this effect":
 
-Registry: :data:`DETECTORS` (effect id → detector), run in that order by
-:func:`run_detectors` because later detectors read data corrected for earlier
-findings (drift first, then black).
+``temporal-drift``
+    χ² of the distinct white references (copies left out) about their mean,
+    ``n − 1`` degrees of freedom; against session time, or against row order
+    where the session has no times (a ``.ti3``: its rows are in measurement
+    order), and the evidence says which. Statistic: the span of the
+    references. The form is named: warm-up, decline, step or wander.
+``black-offset``
+    z of the mean black luminance against 0 (one-sided). Statistic: black / white in Y.
+``channel-interaction``
+    χ² (3 dof) of ``W + 2K − (R + G + B)`` in X, Y and Z with its covariance
+    (white, black and full-drive primaries). Statistic: ``1 − (W − K)/Σ(P − K)`` in Y.
+``chromaticity-shift``
+    per channel, generalized least squares of the black-subtracted sweep's
+    xy against ``(1 − d)`` and ``(1 − d)²`` (the full-drive point included):
+    F-test of the four slopes; the smallest p times 3 channels. Statistic:
+    the fitted xy distance at the lowest usable level.
+``tone-curve-shape``
+    per channel, ``K + k·d^γ`` against ``K + k·f(d)`` with ``f`` GOG or
+    extended power (one more parameter each), weighted by the noise model,
+    black rows at ``d = 0``: F-test of the extra parameter; the smallest p
+    times 2 forms times the channels tested. Statistic: the largest gap
+    between the two fitted curves, in normalized output.
+
+The F-tests divide by the larger of the noise model and the fit's own
+residual variance, so a sweep that scatters more than the noise model says
+cannot turn into a finding. :func:`run_detectors` then applies the
+family-wise significance level (:mod:`workbench.diagnostics.significance`);
+materiality and whether a term enters the model are decided by
+:mod:`workbench.diagnostics.selection`.
+
+Registry: :data:`DETECTORS` (effect id → detector), run in that order:
+drift first, and when it is significant the other detectors read
+drift-corrected data, so drift cannot masquerade as another effect.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from workbench.diagnostics.evidence import (
     ChannelSweep,
     DriftCorrection,
     channel_sweeps,
-    estimate_drift,
-    fit_chromaticity_drift,
+    drift_references,
     xy_of,
+    MIN_CHROMATICITY_OUTPUT,
 )
-from workbench.display.tone_curves import bic, fit_tone_curve
+from workbench.diagnostics.noise import NoiseModel, copy_rows, estimate_noise
+from workbench.diagnostics.significance import (
+    FAMILY_ALPHA,
+    chi2_sf,
+    critical_p,
+    f_sf,
+    z_of_chi2,
+    z_of_p,
+)
 from workbench.session import Session
 
 __all__ = [
     "DetectorResult",
     "DiagnosisContext",
-    "THRESHOLDS",
     "DETECTORS",
     "build_context",
     "run_detectors",
@@ -43,37 +77,71 @@ __all__ = [
     "detect_channel_interaction",
     "detect_chromaticity_shift",
     "detect_tone_curve_shape",
+    "tone_data",
 ]
 
-THRESHOLDS = {
-    "temporal-drift": 0.01,  # span of the white over the session, relative
-    "black-offset": 0.001,  # black luminance relative to white
-    "channel-interaction": 0.005,  # |1 − (W − K)/Σ(P − K)| in Y (and X, Z)
-    "chromaticity-shift": 0.004,  # xy distance of a primary at low drive from full drive
-    "tone-curve-shape": 0.003,  # max |power − flexible| in normalized output, with ΔBIC > 10
-}
-"""Detection thresholds (module doc for how they were set)."""
-
 CHANNEL_NAMES = ("red", "green", "blue")
+MIN_TONE_LEVELS = 5
+"""A channel's shape is tested only with this many sweep levels below full drive."""
 
 
 @dataclass(frozen=True)
 class DetectorResult:
+    """One detector's test.
+
+    Attributes
+    ----------
+    effect : str
+    found : bool
+        Significant and material (set by the selection; detectors set ``significant``).
+    statistic, standard_error : float
+        The effect's size and its standard error from the noise model.
+    p_value : float
+        The test's p-value (1 where not testable).
+    z : float
+        One-sided normal quantile of ``p_value``.
+    critical_z : float
+        ``z`` a finding needs: the family-wise level over the tested detectors.
+    testable : bool
+        False where the session lacks what the test needs (``evidence`` says what).
+    significant : bool
+    impact_dE00 : float or None
+        Mean ΔE00 the term makes on the fixed colour set (materiality).
+    in_model : bool
+        Whether the term entered the extended model (cross-validation).
+    """
+
     effect: str
     found: bool
     statistic: float
-    threshold: float
+    standard_error: float
+    p_value: float
+    z: float
+    critical_z: float
+    testable: bool
     evidence: str
+    significant: bool = False
+    impact_dE00: float | None = None
+    in_model: bool = False
+    cross_validation: str = ""
     details: dict = field(default_factory=dict)
 
     @property
+    def threshold(self) -> float:
+        """The statistic a finding needs at this standard error (critical z × SE)."""
+        return float(self.critical_z * self.standard_error)
+
+    @property
     def score(self) -> float:
-        return float(self.statistic / self.threshold) if self.threshold else 0.0
+        """``z`` over the critical ``z``: how far beyond noise the evidence is."""
+        if not self.testable or not np.isfinite(self.z):
+            return 0.0
+        return float(self.z / self.critical_z)
 
 
 @dataclass(frozen=True, eq=False)
 class DiagnosisContext:
-    """What the detectors read: fit rows (drift-corrected if drift was found), black, sweeps."""
+    """What the detectors read: fit rows (drift-corrected if drift was found), black, sweeps, noise."""
 
     raw: Session
     fit: Session
@@ -82,89 +150,223 @@ class DiagnosisContext:
     black: np.ndarray
     white: np.ndarray
     sweeps: tuple[ChannelSweep, ...]
+    noise: NoiseModel
+    time_basis: str
+    copies: np.ndarray
+    black_count: int
+    white_count: int
 
 
-def build_context(fit_session: Session, drift_found: bool | None = None) -> DiagnosisContext:
-    drift = estimate_drift(fit_session)
+def _untestable(effect: str, why: str) -> DetectorResult:
+    return DetectorResult(effect, False, 0.0, 0.0, 1.0, float("-inf"), np.inf, False,
+                          f"not testable: {why}")
+
+
+def _result(effect, statistic, standard_error, p_value, evidence, details, z=None
+            ) -> DetectorResult:
+    """A tested result; ``z`` from the p-value, or the caller's where the p-value underflows."""
+    z = z_of_p(p_value) if (z is None or p_value > 1e-15) else z
+    return DetectorResult(effect, False, float(statistic), float(standard_error), float(p_value),
+                          float(z), np.inf, True, evidence, details=details)
+
+
+def build_context(fit_session: Session, drift_found: bool | None = None,
+                  noise: NoiseModel | None = None) -> DiagnosisContext:
+    """The detectors' view of ``fit_session``.
+
+    ``drift_found`` None: decided by the drift test at the family-wise level
+    for all detectors; ``noise`` None: estimated from ``fit_session``.
+    """
+    noise = estimate_noise(fit_session) if noise is None else noise
+    copies = copy_rows(fit_session)
+    drift, time_basis = drift_references(fit_session, copies)
     if drift_found is None:
-        drift_found = drift is not None and drift.span > THRESHOLDS["temporal-drift"]
+        test = detect_temporal_drift_raw(drift, time_basis, noise)
+        drift_found = test.testable and test.p_value <= critical_p(len(DETECTORS))
     corrected = drift.correct(fit_session) if (drift is not None and drift_found) else fit_session
-    black = corrected.black_XYZ
-    white = corrected.white_XYZ if corrected.has_white else None
-    sweeps = channel_sweeps(corrected, black)
-    if white is None:  # ramps-only data (e.g. Psychtoolbox): the additive white
-        white = black + sum(s.full_XYZ for s in sweeps)
+    blacks = np.all(corrected.rgb <= 0, axis=1) & ~copies
+    black = corrected.XYZ[blacks].mean(axis=0) if blacks.any() else np.zeros(3)
+    whites = np.all(corrected.rgb >= 255, axis=1) & ~copies
+    sweeps = channel_sweeps(corrected, black, keep=~copies)
+    white = (corrected.XYZ[whites].mean(axis=0) if whites.any()
+             else black + sum(s.full_XYZ for s in sweeps))  # ramps only: the additive white
     return DiagnosisContext(raw=fit_session, fit=corrected, drift=drift, drift_found=drift_found,
-                            black=black, white=white, sweeps=sweeps)
+                            black=black, white=white, sweeps=sweeps, noise=noise,
+                            time_basis=time_basis, copies=copies, black_count=int(blacks.sum()),
+                            white_count=int(whites.sum()))
+
+
+def _drift_form(drift: DriftCorrection, sd: float) -> str:
+    """warm-up, decline, step or wander, from the steps between successive references."""
+    steps = np.diff(drift.gains)
+    clear = steps[np.abs(steps) > 2.5 * np.sqrt(2) * sd]
+    span = drift.span
+    if clear.size == 0:
+        return "a slow trend"
+    if clear.size == 1 and abs(clear[0]) > 0.6 * span:
+        return "a step" + (" up" if clear[0] > 0 else " down")
+    if np.all(clear > 0):
+        return "a warm-up (rising, then settling)" if np.argmax(steps) < steps.size / 2 else \
+            "a rise"
+    if np.all(clear < 0):
+        return "a decline"
+    return "a wander (the display is unstable)"
+
+
+def detect_temporal_drift_raw(drift: DriftCorrection | None, time_basis: str,
+                              noise: NoiseModel) -> DetectorResult:
+    """The drift test on already collected references (module doc)."""
+    if drift is None:
+        return _untestable("temporal-drift", time_basis)
+    Y = drift.luminances
+    sd = noise.sd_Y(Y)
+    weights = 1.0 / sd ** 2
+    mean = float(np.sum(weights * Y) / np.sum(weights))
+    chi2 = float(np.sum(((Y - mean) / sd) ** 2))
+    dof = Y.size - 1
+    p = chi2_sf(chi2, dof)
+    relative_sd = float(np.median(sd / Y))
+    form = _drift_form(drift, relative_sd)
+    unit = "s" if time_basis == "time" else ""
+    where = ("over the session" if time_basis == "time" else
+             "over the session's rows (no times: tested on row order, the order of measurement)")
+    low, high = int(np.argmin(drift.gains)), int(np.argmax(drift.gains))
+    evidence = (f"the {Y.size} distinct white references vary by {100 * drift.span:.1f} % {where} "
+                f"(χ² {chi2:.1f} on {dof} dof against a steady white with the session's "
+                f"{100 * relative_sd:.2f} % repeatability): {form}; lowest "
+                f"{100 * drift.gains[low]:.1f} % of the reference state at "
+                f"{'t = ' if unit else 'row '}{drift.times[low]:.0f}{' s' if unit else ''}, "
+                f"highest {100 * drift.gains[high]:.1f} %")
+    return _result("temporal-drift", drift.span, np.sqrt(2) * relative_sd, p, evidence,
+                   {"times": drift.times.tolist(), "time_basis": time_basis,
+                    "relative_white": drift.gains.tolist(), "chi2": chi2, "dof": dof,
+                    "form": form}, z=z_of_chi2(chi2, dof))
 
 
 def detect_temporal_drift(context: DiagnosisContext) -> DetectorResult:
-    threshold = THRESHOLDS["temporal-drift"]
-    drift = context.drift
-    if drift is None:
-        return DetectorResult("temporal-drift", False, 0.0, threshold,
-                              "not testable: fewer than 3 white references with times")
-    low = int(np.argmin(drift.gains))
-    evidence = (f"white luminance varies by {100 * drift.span:.1f} % over the session "
-                f"({len(drift.times)} references); lowest {100 * drift.gains[low]:.1f} % of the "
-                f"final level at t = {drift.times[low]:.0f} s"
-                + (", rising toward the end (warm-up)" if low < len(drift.gains) // 2 else ""))
-    return DetectorResult("temporal-drift", drift.span > threshold, drift.span, threshold, evidence,
-                          {"times_s": drift.times.tolist(), "relative_white": drift.gains.tolist()})
+    return detect_temporal_drift_raw(context.drift, context.time_basis, context.noise)
 
 
 def detect_black_offset(context: DiagnosisContext) -> DetectorResult:
-    threshold = THRESHOLDS["black-offset"]
-    if not (context.fit.mask("black").any() or np.any(np.all(context.fit.rgb <= 0, axis=1))):
-        return DetectorResult("black-offset", False, 0.0, threshold,
-                              "not testable: no black (0, 0, 0) measurement")
-    ratio = float(context.black[1] / context.white[1])
+    if context.black_count == 0:
+        return _untestable("black-offset", "no black (0, 0, 0) measurement")
+    noise = context.noise
+    white_Y = float(context.white[1])
+    black_Y = float(context.black[1])
+    sd = float(noise.sd_Y(black_Y)) / np.sqrt(context.black_count)
+    ratio = black_Y / white_Y
+    z = black_Y / sd
+    from scipy.special import ndtr
+
+    p = float(ndtr(-z))
     xy = xy_of(context.black)
-    evidence = (f"black measures {100 * ratio:.2f} % of white (Y {context.black[1]:.4g} of "
-                f"{context.white[1]:.4g}) at xy ({xy[0]:.3f}, {xy[1]:.3f}); the baseline "
-                "predicts no light at DAC 0 and lets black leak into every primary")
-    return DetectorResult("black-offset", ratio > threshold, ratio, threshold, evidence,
-                          {"black_XYZ": context.black.tolist(), "ratio": ratio})
+    evidence = (f"black measures {100 * ratio:.2f} % of white (Y {black_Y:.4g} ± {sd:.2g} of "
+                f"{white_Y:.4g}, {context.black_count} distinct black row(s)) at xy "
+                f"({xy[0]:.3f}, {xy[1]:.3f}); the baseline predicts no light at DAC 0 and lets "
+                "black leak into every primary")
+    return _result("black-offset", ratio, sd / white_Y, p, evidence,
+                   {"black_XYZ": context.black.tolist(), "ratio": ratio}, z=z)
+
+
+def _mean_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int) -> np.ndarray:
+    return noise.covariance(XYZ) / max(count, 1)
 
 
 def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
-    threshold = THRESHOLDS["channel-interaction"]
-    summed = sum(s.full_XYZ for s in context.sweeps)
+    if context.white_count == 0:
+        return _untestable("channel-interaction", "no white measured beside the primaries")
+    noise = context.noise
+    summed = sum(s.full_XYZ for s in context.sweeps)  # black subtracted
     white = context.white - context.black
+    difference = white - summed
+    covariance = _mean_covariance(noise, context.white, context.white_count)
+    covariance = covariance + 4 * _mean_covariance(noise, context.black, context.black_count)
+    for sweep in context.sweeps:
+        covariance = covariance + _mean_covariance(noise, sweep.full_XYZ + context.black,
+                                                   sweep.full_count)
+    chi2 = float(difference @ np.linalg.solve(covariance, difference))
+    p = chi2_sf(chi2, 3)
     ratio = white / summed
-    if not (context.fit.mask("white").any()):
-        return DetectorResult("channel-interaction", False, 0.0, threshold,
-                              "not testable: no white measured beside the primaries")
-    deviation = float(np.max(np.abs(1.0 - ratio)))
+    statistic = 1.0 - float(ratio[1])
+    standard_error = float(np.sqrt(covariance[1, 1]) / summed[1])
     direction = "falls short of" if ratio[1] < 1 else "exceeds"
     evidence = (f"white measures {100 * ratio[1]:.1f} % of R+G+B in luminance "
-                f"(X {100 * ratio[0]:.1f} %, Z {100 * ratio[2]:.1f} %, black subtracted): "
-                f"the full-drive mixture {direction} the sum of its primaries")
-    return DetectorResult("channel-interaction", deviation > threshold, deviation, threshold,
-                          evidence, {"white_over_sum": ratio.tolist()})
+                f"(X {100 * ratio[0]:.1f} %, Z {100 * ratio[2]:.1f} %, black subtracted; "
+                f"± {100 * standard_error:.2f} %, χ² {chi2:.1f} on 3 dof): the full-drive "
+                f"mixture {direction} the sum of its primaries")
+    return _result("channel-interaction", statistic, standard_error, p, evidence,
+                   {"white_over_sum": ratio.tolist(), "chi2": chi2}, z=z_of_chi2(chi2, 3))
 
 
-def _chromaticity_drift(sweep: ChannelSweep) -> tuple[float, float]:
-    """Fitted xy distance from full drive at the lowest usable level, and that level."""
-    fit = fit_chromaticity_drift(sweep)
-    if fit is None:
-        return 0.0, 1.0
-    coefficients, lowest = fit
-    u0 = 1.0 - lowest
-    return float(np.hypot(*(u0 * coefficients[0] + u0 ** 2 * coefficients[1]))), lowest
+def _xy_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int, black_cov: np.ndarray,
+                   subtracted: np.ndarray) -> np.ndarray:
+    total = float(np.sum(subtracted))
+    x, y = subtracted[0] / total, subtracted[1] / total
+    jacobian = np.array([[1 - x, -x, -x], [-y, 1 - y, -y]]) / total
+    return jacobian @ (_mean_covariance(noise, XYZ, count) + black_cov) @ jacobian.T
+
+
+def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
+    """(p, distance, its SE, lowest drive, coefficients (2, 2)) of one channel, or None."""
+    usable = sweep.output >= MIN_CHROMATICITY_OUTPUT
+    if usable.sum() < 4:
+        return None
+    black_cov = _mean_covariance(context.noise, context.black, context.black_count)
+    u = 1.0 - sweep.drive[usable]
+    xy = xy_of(sweep.XYZ[usable])
+    rows, targets = [], []
+    for i, index in enumerate(np.flatnonzero(usable)):
+        covariance = _xy_covariance(context.noise, sweep.XYZ[index] + context.black,
+                                    int(sweep.counts[index]), black_cov, sweep.XYZ[index])
+        whitening = np.linalg.inv(np.linalg.cholesky(covariance))
+        design = np.zeros((2, 6))
+        design[0, :3] = [1.0, u[i], u[i] ** 2]
+        design[1, 3:] = [1.0, u[i], u[i] ** 2]
+        rows.append(whitening @ design)
+        targets.append(whitening @ xy[i])
+    design = np.vstack(rows)
+    target = np.concatenate(targets)
+    full, *_ = np.linalg.lstsq(design, target, rcond=None)
+    null_design = design[:, [0, 3]]
+    null, *_ = np.linalg.lstsq(null_design, target, rcond=None)
+    rss_full = float(np.sum((design @ full - target) ** 2))
+    rss_null = float(np.sum((null_design @ null - target) ** 2))
+    dof = target.size - 6
+    scale = max(1.0, rss_full / dof) if dof > 0 else 1.0
+    f_value = (rss_null - rss_full) / 4 / scale
+    p = f_sf(f_value, 4, max(dof, 1))
+    coefficients = np.array([[full[1], full[4]], [full[2], full[5]]])
+    u0 = float(u.max())
+    shift = u0 * coefficients[0] + u0 ** 2 * coefficients[1]
+    distance = float(np.hypot(*shift))
+    parameter_cov = np.linalg.pinv(design.T @ design) * scale
+    gradient = np.zeros(6)
+    if distance > 0:
+        direction = shift / distance
+        gradient[[1, 2]] = direction[0] * np.array([u0, u0 ** 2])
+        gradient[[4, 5]] = direction[1] * np.array([u0, u0 ** 2])
+    standard_error = float(np.sqrt(max(gradient @ parameter_cov @ gradient, 0.0)))
+    return p, distance, standard_error, 1.0 - u0, coefficients, z_of_chi2(4 * f_value, 4)
 
 
 def detect_chromaticity_shift(context: DiagnosisContext) -> DetectorResult:
-    threshold = THRESHOLDS["chromaticity-shift"]
-    shifts = [_chromaticity_drift(s) for s in context.sweeps]
-    worst = int(np.argmax([d for d, _ in shifts]))
-    distance, level = shifts[worst]
+    tests = [_chromaticity_test(s, context) for s in context.sweeps]
+    tested = [t for t in tests if t is not None]
+    if not tested:
+        return _untestable("chromaticity-shift", "no sweep has 4 levels above 2 % of its "
+                                                 "full output")
+    p_values = [t[0] if t is not None else 1.0 for t in tests]
+    worst = int(np.argmin(p_values))
+    p = min(1.0, len(tested) * p_values[worst])
+    _, distance, standard_error, level, _, z = tests[worst]
     evidence = (f"the {CHANNEL_NAMES[worst]} primary's chromaticity (black subtracted) moves by "
-                f"Δxy {distance:.4f} between full drive and DAC {255 * level:.0f}; per channel "
-                + ", ".join(f"{CHANNEL_NAMES[c][0].upper()} {d:.4f}" for c, (d, _) in
-                            enumerate(shifts)))
-    return DetectorResult("chromaticity-shift", distance > threshold, distance, threshold,
-                          evidence, {"shift_xy": [d for d, _ in shifts]})
+                f"Δxy {distance:.4f} ± {standard_error:.4f} between full drive and DAC "
+                f"{255 * level:.0f}; per channel "
+                + ", ".join(f"{CHANNEL_NAMES[c][0].upper()} "
+                            + ("—" if t is None else f"{t[1]:.4f}") for c, t in enumerate(tests)))
+    return _result("chromaticity-shift", distance, standard_error, p, evidence,
+                   {"shift_xy": [0.0 if t is None else t[1] for t in tests],
+                    "p_per_channel": p_values}, z=z)
 
 
 def tone_data(sweep: ChannelSweep, extra: tuple[np.ndarray, np.ndarray] | None = None):
@@ -177,35 +379,79 @@ def tone_data(sweep: ChannelSweep, extra: tuple[np.ndarray, np.ndarray] | None =
     return drive[order], output[order]
 
 
-def detect_tone_curve_shape(context: DiagnosisContext) -> DetectorResult:
-    threshold = THRESHOLDS["tone-curve-shape"]
-    per_channel = []
-    for sweep in context.sweeps:
-        drive, output = tone_data(sweep)
-        if drive.size < 4:
-            per_channel.append((0.0, 0.0, "power"))
+def _shape(form: str, d: np.ndarray, p: np.ndarray) -> np.ndarray:
+    if form == "power":
+        return d ** p[0]
+    if form == "gog":
+        return np.maximum(0.0, (1 - p[1]) * d + p[1]) ** p[0]
+    safe = np.maximum(d, 1e-6)
+    return np.where(d > 0, safe ** (p[0] + p[1] * np.log(safe)), 0.0)
+
+
+_SHAPE_START = {"power": ([2.2], [0.2], [8.0]), "gog": ([2.2, 0.0], [0.2, -0.5], [8.0, 0.5]),
+                "extended-power": ([2.2, 0.0], [0.2, -2.0], [8.0, 2.0])}
+
+
+def _fit_shape(form, drive, Y, sd, black_guess, full_guess):
+    start, low, high = _SHAPE_START[form]
+
+    def residual(q):
+        return (q[0] + q[1] * _shape(form, drive, q[2:]) - Y) / sd
+
+    result = least_squares(residual, x0=[black_guess, full_guess, *start],
+                           bounds=([-np.inf, 0.0, *low], [np.inf, np.inf, *high]))
+    return result.x, float(np.sum(result.fun ** 2))
+
+
+def _tone_test(sweep: ChannelSweep, context: DiagnosisContext):
+    """(p, gap, gap SE, better form) of one channel, or None with too few levels."""
+    inner = sweep.drive < 1.0
+    if inner.sum() < MIN_TONE_LEVELS:
+        return None
+    black = context.black
+    Y = np.concatenate([np.full(context.black_count, black[1]) if context.black_count else [],
+                        sweep.XYZ[:, 1] + black[1]])
+    drive = np.concatenate([np.zeros(context.black_count), sweep.drive])
+    counts = np.concatenate([np.ones(context.black_count), sweep.counts])
+    sd = context.noise.sd_Y(Y) / np.sqrt(counts)
+    full = float(sweep.full_XYZ[1])
+    null, rss_null = _fit_shape("power", drive, Y, sd, black[1], full)
+    grid = np.linspace(0, 1, 256)
+    best = (1.0, 0.0, 0.0, "power", float("-inf"))
+    for form in ("gog", "extended-power"):
+        alternative, rss_alt = _fit_shape(form, drive, Y, sd, black[1], full)
+        dof = Y.size - 4
+        if dof < 1:
             continue
-        power = fit_tone_curve(drive, output, "power")
-        best_gap, best_delta, best_form = 0.0, 0.0, "power"
-        for form in ("gog", "extended-power"):
-            flexible = fit_tone_curve(drive, output, form)
-            delta_bic = bic(power, drive, output) - bic(flexible, drive, output)
-            grid = np.linspace(0, 1, 256)
-            gap = float(np.max(np.abs(power.forward(grid) - flexible.forward(grid))))
-            if delta_bic > 10 and gap > best_gap:
-                best_gap, best_delta, best_form = gap, delta_bic, form
-        per_channel.append((best_gap, best_delta, best_form))
-    worst = int(np.argmax([gap for gap, _, _ in per_channel]))
-    gap, delta_bic, form = per_channel[worst]
+        scale = max(1.0, rss_alt / dof)
+        f_value = (rss_null - rss_alt) / scale
+        p = min(1.0, 2 * f_sf(f_value, 1, dof))
+        gap = float(np.max(np.abs(_shape("power", grid, null[2:])
+                                  - alternative[1] / null[1] * _shape(form, grid, alternative[2:]))))
+        standard_error = gap / np.sqrt(f_value) if f_value > 0 else np.inf
+        if p < best[0] or (p == best[0] and f_value > 0 and z_of_chi2(f_value, 1) > best[4]):
+            best = (p, gap, standard_error, form, z_of_chi2(f_value, 1))
+    return best
+
+
+def detect_tone_curve_shape(context: DiagnosisContext) -> DetectorResult:
+    tests = [_tone_test(s, context) for s in context.sweeps]
+    tested = [t for t in tests if t is not None]
+    if not tested:
+        return _untestable("tone-curve-shape", f"no sweep has {MIN_TONE_LEVELS} levels below "
+                                               "full drive")
+    p_values = [1.0 if t is None else t[0] for t in tests]
+    worst = int(np.argmin(p_values))
+    p = min(1.0, len(tested) * p_values[worst])
+    _, gap, standard_error, form, z = tests[worst]
     article = "an" if form[0] in "aeiou" else "a"
-    evidence = (f"the {CHANNEL_NAMES[worst]} sweep is not a power law: {article} {form} curve fits it "
-                f"better by ΔBIC {delta_bic:.0f} and departs from the best power law by up to "
-                f"{100 * gap:.1f} % of full output" if gap > 0 else
-                "every sweep is fitted by a power law within noise")
-    return DetectorResult("tone-curve-shape", gap > threshold, gap, threshold, evidence,
-                          {"max_gap": [g for g, _, _ in per_channel],
-                           "delta_bic": [d for _, d, _ in per_channel],
-                           "better_form": [f for _, _, f in per_channel]})
+    evidence = (f"the {CHANNEL_NAMES[worst]} sweep is not a power law: {article} {form} curve "
+                f"fits it better (F-test p {p_values[worst]:.2g}) and departs from the best "
+                f"power law by up to {100 * gap:.1f} % of full output")
+    return _result("tone-curve-shape", gap, standard_error, p, evidence,
+                   {"max_gap": [0.0 if t is None else t[1] for t in tests],
+                    "better_form": [None if t is None else t[3] for t in tests],
+                    "p_per_channel": p_values}, z=z)
 
 
 DETECTORS = {
@@ -218,7 +464,21 @@ DETECTORS = {
 """Effect id → detector, in the order they run."""
 
 
-def run_detectors(fit_session: Session) -> tuple[DiagnosisContext, tuple[DetectorResult, ...]]:
-    """Every detector on the fit rows; the context the extended fit then uses."""
-    context = build_context(fit_session)
-    return context, tuple(detector(context) for detector in DETECTORS.values())
+def run_detectors(fit_session: Session, noise: NoiseModel | None = None
+                  ) -> tuple[DiagnosisContext, tuple[DetectorResult, ...]]:
+    """Every detector on the fit rows, with the family-wise significance level applied.
+
+    The level is ``FAMILY_ALPHA / m`` for the ``m`` detectors of
+    :data:`DETECTORS` (all of them, tested or not: a session that cannot test
+    an effect does not earn the others a looser level).
+    """
+    context = build_context(fit_session, noise=noise)
+    level = critical_p(len(DETECTORS), FAMILY_ALPHA)
+    critical = z_of_p(level)
+    results = []
+    for detector in DETECTORS.values():
+        result = detector(context)
+        if result.testable:
+            result = replace(result, critical_z=critical, significant=result.p_value <= level)
+        results.append(result)
+    return context, tuple(results)

@@ -16,7 +16,7 @@ from workbench.display.gamma_matrix import RAMP_KINDS
 from workbench.errors import InputError
 from workbench.session import Session
 
-__all__ = ["DriftCorrection", "ChannelSweep", "estimate_drift", "channel_sweeps",
+__all__ = ["DriftCorrection", "ChannelSweep", "TIME_BASES", "drift_references", "channel_sweeps",
            "fit_chromaticity_drift", "xy_of", "MIN_CHROMATICITY_OUTPUT"]
 
 
@@ -31,13 +31,16 @@ def xy_of(XYZ: np.ndarray) -> np.ndarray:
 class DriftCorrection:
     """Relative output ``g(t)`` from the white references (1 at the reference state).
 
-    ``g`` is interpolated piecewise-linearly between the white references and
-    held flat beyond them; the reference state is the mean of the last two
-    whites (a warmed-up display).
+    ``g`` is interpolated piecewise-linearly between the distinct white
+    references and held flat beyond them; the reference state is the mean of
+    the last two references (a warmed-up display). ``times`` are seconds, or
+    row numbers where the session has no times (the rows of a ``.ti3`` are in
+    measurement order).
     """
 
     times: np.ndarray
     gains: np.ndarray
+    luminances: np.ndarray
 
     def gain(self, t_s) -> np.ndarray:
         return np.interp(np.asarray(t_s, dtype=float), self.times, self.gains)
@@ -56,18 +59,33 @@ class DriftCorrection:
         return float(self.gains.max() - self.gains.min())
 
 
-def estimate_drift(session: Session) -> DriftCorrection | None:
-    """Drift from repeated whites, or None when there are fewer than 3 with times."""
+TIME_BASES = ("time", "row order")
+"""How a session orders its drift references: its times, or its row order (no times)."""
+
+
+def drift_references(session: Session, copies: np.ndarray | None = None
+                     ) -> tuple[DriftCorrection | None, str]:
+    """The distinct white references over time, and the time basis (or why untestable).
+
+    Returns ``(drift, basis)``: ``basis`` is ``"time"`` or ``"row order"``
+    (``session.metadata["time_basis"]``) when ``drift`` is not None; otherwise
+    it says why drift cannot be tested. Copies (``copies`` true) are left out:
+    a copy of a reference is not a second look at the display.
+    """
     if session.t_s is None:
-        return None
-    whites = session.mask("white")
-    if whites.sum() < 3:
-        return None
+        return None, "the rows have no times and are not in measurement order"
+    basis = session.metadata.get("time_basis", "time")
+    whites = np.all(session.rgb >= 255, axis=1)
+    if copies is not None:
+        whites &= ~copies
+    if whites.sum() < 2:
+        return None, (f"{int(whites.sum())} distinct white reference(s); a trend needs at least "
+                      "2 (a repeated white)")
     order = np.argsort(session.t_s[whites], kind="stable")
     times = session.t_s[whites][order]
     Y = session.XYZ[whites, 1][order]
     reference = Y[-2:].mean()
-    return DriftCorrection(times=times, gains=Y / reference)
+    return DriftCorrection(times=times, gains=Y / reference, luminances=Y), basis
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,15 +97,18 @@ class ChannelSweep:
     drive : ndarray
         Normalized drive ``d`` of each point (0..1], ascending.
     XYZ : ndarray (n, 3)
-        Black-subtracted XYZ at each point.
+        Black-subtracted XYZ at each point (mean of its rows).
     full_XYZ : ndarray (3,)
         Black-subtracted XYZ at full drive.
+    counts : ndarray (n,)
+        Rows averaged at each point.
     """
 
     channel: int
     drive: np.ndarray
     XYZ: np.ndarray
     full_XYZ: np.ndarray
+    counts: np.ndarray | None = None
 
     @property
     def output(self) -> np.ndarray:
@@ -98,23 +119,29 @@ class ChannelSweep:
     def full_xy(self) -> np.ndarray:
         return xy_of(self.full_XYZ)
 
+    @property
+    def full_count(self) -> int:
+        return 1 if self.counts is None else int(self.counts[-1])
 
-def channel_sweeps(session: Session, black: np.ndarray) -> tuple[ChannelSweep, ...]:
-    """The three black-subtracted sweeps (rows of kind ramp-*, other channels at 0)."""
+
+def channel_sweeps(session: Session, black: np.ndarray, keep: np.ndarray | None = None
+                   ) -> tuple[ChannelSweep, ...]:
+    """The three black-subtracted sweeps (single-channel rows), rows ``keep`` only."""
     sweeps = []
+    keep = np.ones(len(session), dtype=bool) if keep is None else keep
     for channel, kind in enumerate(RAMP_KINDS):
         others = [c for c in range(3) if c != channel]
-        rows = (session.mask(kind) & np.all(session.rgb[:, others] == 0, axis=1)
-                & (session.rgb[:, channel] > 0))
+        rows = (np.all(session.rgb[:, others] == 0, axis=1) & (session.rgb[:, channel] > 0)
+                & keep)
         if not rows.any() or session.rgb[rows, channel].max() < 255:
             raise InputError(f"session {session.source!r}: the {kind} sweep is missing or does not "
                              "reach DAC 255; diagnosis needs each channel swept to full drive")
         levels = session.rgb[rows, channel]
         XYZ = session.XYZ[rows] - black
-        unique = np.unique(levels)
-        mean_XYZ = np.array([XYZ[levels == v].mean(axis=0) for v in unique])
+        unique, inverse, counts = np.unique(levels, return_inverse=True, return_counts=True)
+        mean_XYZ = np.array([XYZ[inverse == i].mean(axis=0) for i in range(unique.size)])
         sweeps.append(ChannelSweep(channel=channel, drive=unique / 255.0, XYZ=mean_XYZ,
-                                   full_XYZ=mean_XYZ[-1]))
+                                   full_XYZ=mean_XYZ[-1], counts=counts))
     return tuple(sweeps)
 
 

@@ -79,11 +79,14 @@ def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
     return ChannelInteraction(amount=1.0 - ratio)
 
 
-def fit_extended(context: DiagnosisContext, effects, baseline=None) -> ExtendedDisplay:
+def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=None
+                 ) -> ExtendedDisplay:
     """The extended model with the terms for ``effects`` (ids of found effects).
 
     Where a channel has fewer than three sweep points (published primaries
-    only), its tone curve is the ``baseline``'s power law.
+    only), its tone curve is the ``baseline``'s power law. ``tone_forms``
+    (one form per channel) skips the choice of form by BIC and refits those
+    forms: the cross-validation folds refit the chosen model, not a new choice.
     """
     effects = set(effects)
     interaction = _interaction_term(context) if "channel-interaction" in effects else None
@@ -94,6 +97,8 @@ def fit_extended(context: DiagnosisContext, effects, baseline=None) -> ExtendedD
         drive, output = tone_data(sweep, extra)
         if drive.size < 3 and baseline is not None:
             curve = PowerCurve(float(baseline.gamma[sweep.channel]))
+        elif "tone-curve-shape" in effects and tone_forms is not None:
+            curve = fit_tone_curve(drive, output, tone_forms[sweep.channel])
         elif "tone-curve-shape" in effects:
             curve, _ = select_tone_curve(drive, output)
         else:

@@ -3,14 +3,22 @@
 Protocol ``holdout``: the baseline (the paper's gamma + 3×3) and the extended
 model are fitted on every row but the ``validation`` ones, and both are
 scored in CIEDE2000 on the validation rows only (CIELAB white: the measured
-display white, the mean of the white rows). The channel-interaction term is
-fitted on the white references, the drift correction on the white
-references; neither sees a validation row.
+display white, the mean of the white rows). A finding is an effect whose
+test is significant over all detectors together and whose impact on a fixed
+colour set is material (:mod:`workbench.diagnostics.significance`); its term
+enters the extended model only where it improves a cross-validated
+prediction of the fit rows (:mod:`workbench.diagnostics.cross_validation`).
+The validation rows are read once the model is final: for the score, the
+attribution and the ``unexplained-residual`` check, never to choose a term.
+
+Findings are ordered with ``temporal-drift`` first (the other detectors read
+its correction, so it is the cause they are conditioned on), then by impact
+on the fixed colours, then ``unexplained-residual``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -21,7 +29,15 @@ from workbench.diagnostics.detectors import (
     build_context,
     run_detectors,
 )
+from workbench.diagnostics.cross_validation import select_terms
 from workbench.diagnostics.extension import TERMS, fit_extended, fitted_on
+from workbench.diagnostics.significance import (
+    FAMILY_ALPHA,
+    FIXED_COLOURS,
+    MATERIALITY_FLOOR_DE00,
+    mean_dE00_on_fixed_colours,
+)
+from workbench.diagnostics.unexplained import unexplained_residual
 from workbench.display import DisplayModel, GammaMatrixDisplay
 from workbench.display.residual_lut import fit_residual_lut
 from workbench.errors import InputError
@@ -66,11 +82,25 @@ class Diagnosis:
     fallback_model: str = ""
     fallback_protocol: str = ""
     attribution: dict | None = None
+    unexplained: DetectorResult | None = None
+    cross_validation: dict = field(default_factory=dict)
 
     @property
     def findings(self) -> tuple[DetectorResult, ...]:
-        return tuple(sorted((r for r in self.results if r.found), key=lambda r: r.score,
-                            reverse=True))
+        """Found effects: drift first, then by impact on the fixed colours, then unexplained."""
+        named = sorted((r for r in self.results if r.found),
+                       key=lambda r: (r.effect != "temporal-drift", -(r.impact_dE00 or 0.0)))
+        return tuple(named) + ((self.unexplained,) if self.unexplained is not None else ())
+
+    @property
+    def untested(self) -> tuple[tuple[str, str], ...]:
+        """(effect, why) for every effect the session could not test, and how drift was tested."""
+        notes = [(r.effect, r.evidence.removeprefix("not testable: ")) for r in self.results
+                 if not r.testable]
+        if self.context.time_basis == "row order" and self.context.drift is not None:
+            notes.append(("temporal-drift", "tested on row order: the session has no times, its "
+                                            "rows are taken to be in measurement order"))
+        return tuple(notes)
 
     @property
     def baseline_score(self) -> ValidationScore | None:
@@ -107,13 +137,20 @@ class Diagnosis:
                         "validation": int(self.session.mask("validation").sum())},
             "baseline": {"model": self.baseline.describe(),
                          "validation": None if base is None else base.to_json()},
-            "findings": [{"effect": r.effect, "evidence": r.evidence, "score": r.score,
-                          "statistic": r.statistic, "threshold": r.threshold}
-                         for r in self.findings],
+            "findings": [_finding_json(r) for r in self.findings],
+            "checked": [_finding_json(r) for r in self.results if not r.found],
+            "untested": [{"effect": e, "reason": why} for e, why in self.untested],
+            "noise": self.context.noise.to_json(),
+            "significance": {"family_alpha": FAMILY_ALPHA, "method": "Bonferroni over the "
+                             f"{len(self.results)} detectors",
+                             "materiality_floor_dE00": MATERIALITY_FLOOR_DE00,
+                             "materiality_colours": "5×5×5 cube of DAC values 0, 64, 128, 191, 255"},
+            "cross_validation": {k: v for k, v in self.cross_validation.items()
+                                 if k not in ("tone_forms", "by_effect")},
             "extended": {"model": self.extended.describe(), "protocol": self.protocol,
                          "terms": [{"effect": r.effect, "term": TERMS[r.effect],
                                     "fitted_on": fitted_on(r.effect, self.context.fit)}
-                                   for r in self.findings],
+                                   for r in self.findings if r.in_model],
                          "validation": None if ext is None else ext.to_json()},
             "gain": {"mean_dE00_reduction_pct": self.gain_pct},
             "attribution": self._attribution_json(),
@@ -121,13 +158,58 @@ class Diagnosis:
                 "model": self.fallback_model, "protocol": self.fallback_protocol,
                 "validation": score_validation(self.fallback_dE).to_json()},
             "reference_white": "measured display white (mean of the white rows), CIELAB for ΔE00",
+            **({"unexplained": _finding_json(self.unexplained)} if self.unexplained else {}),
         }
 
 
+def _number(value):
+    value = None if value is None else float(value)
+    return None if value is None or not np.isfinite(value) else value
+
+
+def _finding_json(result: DetectorResult) -> dict:
+    return {"effect": result.effect, "evidence": result.evidence, "score": result.score,
+            "statistic": result.statistic, "standard_error": _number(result.standard_error),
+            "z": _number(result.z), "p_value": result.p_value,
+            "critical_z": _number(result.critical_z), "threshold": _number(result.threshold),
+            "impact_dE00": _number(result.impact_dE00), "significant": result.significant,
+            "testable": result.testable, "in_model": result.in_model,
+            "cross_validation": result.cross_validation}
+
+
+def with_measurement_order(session: Session) -> Session:
+    """The session with row numbers as times where it has none and its rows are in measured order.
+
+    A ``.ti3`` (and a session CSV without ``t_s``) lists its rows in the order
+    they were measured, so its drift references can be tested against row
+    order; Psychtoolbox files and published profiles are not in measurement
+    order and keep no times (drift is then untestable, and said so).
+    """
+    if session.t_s is not None or session.metadata.get("format") in UNORDERED_FORMATS:
+        return session
+    return Session(kind=session.kind, rgb=session.rgb, XYZ=session.XYZ,
+                   t_s=np.arange(len(session), dtype=float), wavelengths=session.wavelengths,
+                   spectra=session.spectra, source=session.source,
+                   metadata={**session.metadata, "time_basis": "row order"})
+
+
+UNORDERED_FORMATS = ("psychtoolbox", "profile")
+"""Session formats whose rows are not in measurement order."""
+
+
 def diagnose(session: Session) -> Diagnosis:
-    """Run the detectors, fit baseline and extended models, score both on validation rows."""
+    """Test every effect, extend the model by cross-validation, score both on validation rows once.
+
+    Steps: the noise model and the detectors on the fit rows (significance
+    over all detectors); each significant effect's impact on the fixed colour
+    set (materiality); the terms of the found effects that improve a K-fold
+    cross-validated prediction of the fit rows; then baseline and extension
+    scored on the validation rows, and an ``unexplained-residual`` finding
+    when the held-out error is far above what the session's noise explains.
+    """
     if len(session) == 0:
         raise InputError(f"session {session.source!r} is empty")
+    session = with_measurement_order(session)
     fit_session = session.without("validation")
     validation = session.select("validation")
     if "baseline_parameters" in session.metadata:  # published numbers: nothing to fit on
@@ -135,23 +217,68 @@ def diagnose(session: Session) -> Diagnosis:
     else:
         baseline = GammaMatrixDisplay.fit(fit_session)
     context, results = run_detectors(fit_session)
+    results = _materiality(context, results, baseline)
     found = [r.effect for r in results if r.found]
-    extended = fit_extended(context, found, baseline) if found else baseline
+    if "temporal-drift" not in found and context.drift_found:
+        context = build_context(fit_session, drift_found=False, noise=context.noise)
+    terms, cross_validation = select_terms(context, found, baseline,
+                                           {r.effect: r.impact_dE00 for r in results})
+    if terms and "temporal-drift" not in terms and context.drift_found:
+        context = build_context(fit_session, drift_found=False, noise=context.noise)
+    extended = (fit_extended(context, terms, baseline, cross_validation.get("tone_forms"))
+                if cross_validation.get("use_extension") else baseline)
+    results = tuple(replace(r, in_model=r.effect in terms and extended is not baseline,
+                            cross_validation=cross_validation["by_effect"].get(r.effect, ""))
+                    for r in results)
     white = session.white_XYZ if session.has_white else context.white
+    in_model = [t for t in terms if extended is not baseline]
     if len(validation):
         baseline_dE = delta_E2000(baseline.forward(validation.rgb), validation.XYZ, white)
-        extended_dE = _score_extended(extended, context, found, validation, white)
-        attribution = _attribution(context, found, baseline, validation, white)
+        extended_dE = _score_extended(extended, context, in_model, validation, white)
+        attribution = _attribution(context, in_model, baseline, validation, white)
     else:
         baseline_dE = extended_dE = np.zeros(0)
         attribution = None
     fallback_dE, fallback_model, fallback_protocol = _residual_lut_fallback(
-        extended, session, context, found, white)
+        extended, session, context, in_model, white)
+    unexplained = unexplained_residual(context, extended, in_model, validation, white,
+                                       np.atleast_1d(extended_dE))
     return Diagnosis(session=session, context=context, results=results, baseline=baseline,
                      extended=extended, white=white, baseline_dE=np.atleast_1d(baseline_dE),
                      extended_dE=np.atleast_1d(extended_dE), protocol="holdout",
                      fallback_dE=fallback_dE, fallback_model=fallback_model,
-                     fallback_protocol=fallback_protocol, attribution=attribution)
+                     fallback_protocol=fallback_protocol, attribution=attribution,
+                     unexplained=unexplained, cross_validation=cross_validation)
+
+
+def _materiality(context: DiagnosisContext, results, baseline) -> tuple[DetectorResult, ...]:
+    """Each significant effect's impact on :data:`FIXED_COLOURS`; found = significant and material."""
+    significant = [r.effect for r in results if r.significant]
+    if not significant:
+        return results
+    full = fit_extended(context, significant, baseline)
+    white = context.white
+    predicted = full.forward(FIXED_COLOURS)
+    out = []
+    for result in results:
+        if not result.significant:
+            out.append(result)
+            continue
+        if result.effect == "temporal-drift":
+            gains = context.drift.gains
+            impact = mean_dE00_on_fixed_colours(predicted * gains.max(), predicted * gains.min(),
+                                                white)
+        else:
+            without = fit_extended(context, [e for e in significant if e != result.effect],
+                                   baseline, _tone_forms(full))
+            impact = mean_dE00_on_fixed_colours(predicted, without.forward(FIXED_COLOURS), white)
+        out.append(replace(result, impact_dE00=impact,
+                           found=bool(impact >= MATERIALITY_FLOOR_DE00)))
+    return tuple(out)
+
+
+def _tone_forms(model) -> tuple[str, ...] | None:
+    return tuple(curve.form for curve in model.tone) if hasattr(model, "tone") else None
 
 
 def _score_extended(model, context: DiagnosisContext, found, validation: Session, white):
@@ -174,7 +301,7 @@ def _attribution(context: DiagnosisContext, found, baseline, validation: Session
 
     def without(effects):
         if "temporal-drift" in found and "temporal-drift" not in effects:
-            rebuilt = build_context(context.raw, drift_found=False)
+            rebuilt = build_context(context.raw, drift_found=False, noise=context.noise)
         else:
             rebuilt = context
         model = fit_extended(rebuilt, effects, baseline)
