@@ -116,11 +116,13 @@ class Level2Light:
     unreachable_dac: np.ndarray
 
     def to_json(self) -> dict:
+        """Flat arrays (Unity's JsonUtility reads no nested arrays): ``matrix`` is the
+        3 × C matrix row-major (row r, g, b of drive), ``texel_table`` 3 × 256 channel-major."""
         return {"id": self.id,
-                "matrix": self.drive_matrix.T.astype(float).tolist(),
-                "offset": self.drive_offset.astype(float).tolist(),
+                "matrix": [float(v) for v in self.drive_matrix.T.reshape(-1)],
+                "offset": [float(v) for v in self.drive_offset],
                 "light_rgb8": [int(v) for v in self.light_rgb8],
-                "texel_table": self.texel_table.astype(int).tolist(),
+                "texel_table": [int(v) for v in self.texel_table.reshape(-1)],
                 "unreachable_dac": [int(v) for v in self.unreachable_dac]}
 
 

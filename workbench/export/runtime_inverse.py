@@ -125,17 +125,28 @@ class RuntimeDisplayInverse:
     def to_json(self) -> dict:
         """The ``display_inverse.json`` body (the correction table goes to its own file)."""
         return {
+            "format": "vr-colour-workbench-display-inverse", "format_version": 1,
             "model": self.model,
-            "XYZ_to_drive": self.XYZ_to_drive.tolist(),
-            "drive_offset": self.drive_offset.tolist(),
-            "thresholds_sqrt_drive": [[float(v) for v in row] for row in self.thresholds],
+            "XYZ_to_drive": [float(v) for v in self.XYZ_to_drive.reshape(-1)],
+            "drive_offset": [float(v) for v in self.drive_offset],
+            "thresholds": [float(v) for v in self.thresholds.reshape(-1)],
             "unreached_threshold": UNREACHED_THRESHOLD,
-            "correction": None if self.correction is None else {
+            "correction": {"size": 0, "domain": [0.0, 1.0], "file": ""}
+            if self.correction is None else {
                 "size": int(self.correction.shape[0]),
-                "domain": list(self.correction_domain),
-                "file": "display_drive_correction.bin",
-                "dtype": "float32 little-endian",
-                "layout": "[b][g][r][channel], red fastest, 3 channels (drive r, g, b)"},
+                "domain": [float(v) for v in self.correction_domain],
+                "file": "display_drive_correction.bin"},
+            "layout": {
+                "XYZ_to_drive": "3 x 3 row-major: drive_j = sum_i XYZ_i * XYZ_to_drive[3 i + j] "
+                                "+ drive_offset[j]",
+                "thresholds": "3 x 255 channel-major: thresholds[255 c + v - 1] is the smallest "
+                              "sqrt(drive) of channel c giving DAC >= v; DAC = how many of the "
+                              "channel's 255 thresholds are <= sqrt(clamp(drive, 0, 1)), float32",
+                "correction": "size 0: none (the drive is affine in XYZ). Otherwise "
+                              "display_drive_correction.bin, float32 little-endian "
+                              "[b][g][r][3], red fastest: the display's drive at the node whose "
+                              "affine drive is domain[0] + index * (domain[1] - domain[0]) / "
+                              "(size - 1), read trilinearly with the affine drive clamped to domain"},
         }
 
 

@@ -1,0 +1,275 @@
+"""The runtime bundle: everything a VR application loads to show the workbench's colours.
+
+:func:`write_bundle` writes, into one folder (built beside it and swapped in
+whole, so a reader never sees half a bundle):
+
+==============================  ==============================================================
+``bundle.json``                 manifest: format and version, the files, lights, cubes, and the
+                                runtime colour space the data assume
+``profile.vrprofile.json``      the profile, with its ``lut3d`` and ``runtime`` blocks filled in
+``display_inverse.cube``        engine sRGB-encoded output → HMD DAC/255 (:mod:`.cube_lut`)
+``display_inverse.json``        the inverse in the level-2 runtime's form (:mod:`.runtime_inverse`),
+                                plus ``display_drive_correction.bin`` where the model needs it
+``lights.json``                 the level-1 light table (:mod:`.lights_table`)
+``level2/<cube>/``              coefficients, basis, per-light matrices and tables (:mod:`.level2_files`)
+``runtime/``                    ``reference_consumer.py`` (numpy + json only), the Unity C# loader,
+                                the HLSL and GLSL shaders
+``README.md``                   how a runtime uses each file, and the three lines that load it in Unity
+==============================  ==============================================================
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import re
+import shutil
+import string
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from workbench.errors import InputError
+from workbench.export.cube_lut import (
+    DEFAULT_LUT_SIZE,
+    CubeAccuracy,
+    cube_accuracy,
+    display_inverse_table,
+    white_mapping_XYZ,
+    write_cube_file,
+)
+from workbench.export.level2_files import (
+    DEFAULT_IDENTICAL_SHARE,
+    ComponentChoice,
+    choose_cube_basis,
+    level2_light,
+    write_level2_cube,
+)
+from workbench.export.lights_table import lights_table
+from workbench.export.runtime_inverse import runtime_display_inverse
+from workbench.fileio import atomic_writer
+from workbench.profile import PROFILE_FORMAT_VERSION, RUNTIME_COLOUR_SPACE, Profile, save_profile
+
+__all__ = [
+    "BUNDLE_FORMAT",
+    "BUNDLE_FORMAT_VERSION",
+    "RUNTIME_FILES",
+    "BundleSummary",
+    "write_bundle",
+    "runtime_file",
+]
+
+BUNDLE_FORMAT = "vr-colour-workbench-bundle"
+BUNDLE_FORMAT_VERSION = 1
+
+RUNTIME_FILES = ("reference_consumer.py", "VrColourBundle.cs", "Level2Relight.hlsl",
+                 "level2_relight.frag", "level2_relight.vert")
+"""Files of ``workbench/export/runtime/`` copied into every bundle's ``runtime/``."""
+
+_NAME = re.compile(r"[^A-Za-z0-9_-]+")
+
+
+def runtime_file(name: str) -> Path:
+    """Path of a shipped runtime file (package data of ``workbench.export``)."""
+    path = Path(str(resources.files("workbench.export").joinpath("runtime", name)))
+    if not path.is_file():
+        raise FileNotFoundError(f"runtime file {name!r} is missing from the installation")
+    return path
+
+
+@dataclass(frozen=True)
+class BundleSummary:
+    """What :func:`write_bundle` wrote and the figures it measured."""
+
+    directory: Path
+    lights: tuple[str, ...]
+    cube_accuracy: CubeAccuracy
+    cubes: tuple[dict, ...]
+    drive_correction: bool
+
+    def to_json(self) -> dict:
+        return {"bundle": str(self.directory), "lights": list(self.lights),
+                "display_inverse_cube": {"size": self.cube_accuracy.size,
+                                         **self.cube_accuracy.to_json()},
+                "drive_correction": self.drive_correction, "cubes": list(self.cubes)}
+
+
+def _cube_name(path: Path, taken: set[str]) -> str:
+    name = _NAME.sub("-", path.name.split(".")[0]).strip("-") or "cube"
+    if name in taken:
+        raise InputError(f"--cube {path}: two cubes would both be named {name!r} in the bundle; "
+                         "rename one file")
+    return name
+
+
+@contextlib.contextmanager
+def _staged_directory(target: Path):
+    """A fresh folder beside ``target`` that replaces it when the block succeeds."""
+    if target.exists() and not target.is_dir():
+        raise InputError(f"--bundle {target}: exists and is not a folder")
+    if target.is_dir() and any(target.iterdir()) and not (target / "bundle.json").is_file():
+        raise InputError(f"--bundle {target}: the folder holds files and is not a bundle; "
+                         "give a new or empty folder (an existing bundle is replaced)")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.", suffix=".partial"))
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(staging, 0o777 & ~mask)  # a folder as mkdir makes it, not mkdtemp's 0700
+    try:
+        yield staging
+        old = None
+        if target.exists():
+            old = target.parent / f".{target.name}.old-{os.getpid()}"
+            os.replace(target, old)
+        os.replace(staging, target)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+def _write_json(path: Path, document: dict) -> None:
+    with atomic_writer(path) as handle:
+        json.dump(document, handle, indent=1)
+        handle.write("\n")
+
+
+def _readme(profile: Profile, manifest: dict, accuracy: CubeAccuracy) -> str:
+    template = string.Template(runtime_file("README.md.template").read_text(encoding="utf-8"))
+    cubes = manifest["cubes"]
+    cube_lines = "\n".join(
+        f"- `level2/{c['name']}/`: {c['width']}×{c['height']} texels, K = {c['components']} "
+        f"basis coefficients + {c['split']} precision channel(s) = {c['channels']} channels in "
+        f"{c['layers']} RGBA16F layer(s)" for c in cubes) or "- (none: export with --cube CUBE)"
+    example_cube = cubes[0]["name"] if cubes else "CUBE"
+    return template.substitute(
+        device=profile.device.get("name", "display"), model=manifest["display_model"],
+        lights=", ".join(f"`{light}`" for light in manifest["lights"]),
+        first_light=manifest["lights"][0], example_cube=example_cube, cubes=cube_lines,
+        size=accuracy.size, mean=f"{accuracy.mean_dE00:.3f}", p95=f"{accuracy.p95_dE00:.3f}",
+        max=f"{accuracy.max_dE00:.3f}", samples=accuracy.samples,
+        white=", ".join(f"{v:.4g}" for v in manifest["white_mapping_XYZ"]),
+        k=f"{profile.k:g}", colour_space=RUNTIME_COLOUR_SPACE,
+        correction=("yes: this model's drive is not affine in XYZ, so display_inverse.json "
+                    "names display_drive_correction.bin" if manifest["drive_correction"]
+                    else "none: this model's drive is affine in XYZ"),
+        version=BUNDLE_FORMAT_VERSION)
+
+
+def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None = None,
+                 cubes: Sequence = (), lut_size: int = DEFAULT_LUT_SIZE,
+                 target_share: float = DEFAULT_IDENTICAL_SHARE) -> BundleSummary:
+    """Write the runtime bundle of ``profile`` into ``directory`` (module doc).
+
+    Parameters
+    ----------
+    profile : Profile
+    directory : path-like
+        New, empty, or an earlier bundle (replaced whole).
+    light_ids : sequence of str, optional
+        Library source ids; default: the profile's own lights.
+    cubes : sequence of path-like or (name, ReflectanceCube)
+        Hyperspectral cubes to export for level 2.
+    lut_size : int
+        Nodes per axis of ``display_inverse.cube``.
+    target_share : float
+        Share of held-out texels whose runtime texel must equal the full-band
+        level-2 texel when K is chosen (:func:`~.level2_files.choose_cube_basis`).
+    """
+    from workbench.hyperspectral import ReflectanceCube, read_cube
+    from workbench.illuminants import get_illuminant
+
+    directory = Path(directory)
+    light_ids = tuple(light_ids) if light_ids else tuple(light["id"] for light in profile.lights)
+    if not light_ids:
+        raise InputError("the profile has no lights; name some with --lights ID,...")
+    illuminants = [get_illuminant(light_id) for light_id in light_ids]
+    light_ids = tuple(illuminant.id for illuminant in illuminants)
+    display = profile.display_model()
+    loaded, taken = [], set()
+    for item in cubes:
+        if isinstance(item, tuple):
+            name, cube = item
+            if not isinstance(cube, ReflectanceCube) or _NAME.search(name) or not name:
+                raise InputError(f"cube {name!r}: give (name, ReflectanceCube) with a name of "
+                                 "letters, digits, '-' and '_'")
+            if name in taken:
+                raise InputError(f"two cubes named {name!r}")
+        else:
+            name, cube = _cube_name(Path(item), taken), read_cube(item)
+        taken.add(name)
+        loaded.append((name, cube))
+
+    inverse = runtime_display_inverse(display)
+    table = display_inverse_table(display, profile.k, lut_size)
+    accuracy = cube_accuracy(table, display, profile.k)
+    white = white_mapping_XYZ(display, profile.k)
+    lut3d = {"file": "display_inverse.cube", "size": lut_size, "direction": "sRGB_to_DAC",
+             "input": "engine output, sRGB-encoded (IEC 61966-2-1) on 0..1, as colours of the "
+                      "ideal sRGB display",
+             "output": "HMD DAC / 255 from the profile's display inverse (out of gamut: clipped "
+                       "per channel in linear drive)",
+             "white_mapping": {"input_rgb": [1.0, 1.0, 1.0], "XYZ": [float(v) for v in white],
+                               "description": "sRGB white is CIE D65 at Y = k * Y_white of the "
+                                              "headset (relative colorimetry, design §2)"},
+             "convention": "Iridas/Resolve .cube: LUT_3D_SIZE, no DOMAIN_ lines (0..1), red "
+                           "fastest; read by Unity HDRP and DaVinci Resolve",
+             "accuracy": accuracy.to_json()}
+    runtime = {"colour_space": RUNTIME_COLOUR_SPACE,
+               "framebuffer": "8-bit, sRGB-encoded by the engine (linear workflow); the HMD "
+                              "receives these values as DAC",
+               "notes": "Level 1: set the light colour to lights.json rgb8. Level 2: relight the "
+                        "level2/ textures with the shader. Other sRGB content: apply "
+                        "display_inverse.cube as the last colour step; never apply it to "
+                        "level-1/level-2 output, which is already in DAC."}
+    bundle_profile = replace(profile.with_lights(light_ids), lut3d=lut3d, runtime=runtime)
+
+    level2 = []
+    with _staged_directory(directory) as staging:
+        save_profile(bundle_profile, staging / "profile.vrprofile.json")
+        write_cube_file(staging / "display_inverse.cube", table,
+                        title=f"{profile.device.get('name', 'display')}: sRGB to HMD DAC",
+                        comments=[f"in: engine output, sRGB-encoded 0..1; sRGB white = D65 at "
+                                  f"Y = k*Y_white = {white[1]:.6g} ({profile.xyz_scale})",
+                                  "out: HMD DAC/255 from the display inverse "
+                                  f"({display.describe()})",
+                                  "red fastest; trilinear vs exact inverse, in gamut: mean "
+                                  f"dE00 {accuracy.mean_dE00:.4f}, p95 {accuracy.p95_dE00:.4f}, "
+                                  f"max {accuracy.max_dE00:.4f}"])
+        _write_json(staging / "display_inverse.json", inverse.to_json())
+        if inverse.correction is not None:
+            with atomic_writer(staging / "display_drive_correction.bin", "wb") as handle:
+                handle.write(np.ascontiguousarray(inverse.correction, dtype="<f4").tobytes())
+        _write_json(staging / "lights.json", lights_table(bundle_profile, light_ids))
+        for name, cube in loaded:
+            basis, choice = choose_cube_basis(cube, display, illuminants, inverse, k=profile.k,
+                                              observer=profile.observer,
+                                              target_share=target_share)
+            records = [level2_light(basis, illuminant, display, inverse, k=profile.k,
+                                    split=choice.split) for illuminant in illuminants]
+            level2.append(write_level2_cube(staging, name, cube, basis, choice.split, records,
+                                            choice))
+        (staging / "runtime").mkdir()
+        for name in RUNTIME_FILES:
+            shutil.copyfile(runtime_file(name), staging / "runtime" / name)
+        manifest = {"format": BUNDLE_FORMAT, "format_version": BUNDLE_FORMAT_VERSION,
+                    "profile": "profile.vrprofile.json",
+                    "profile_format_version": PROFILE_FORMAT_VERSION,
+                    "device": profile.device.get("name", ""), "display_model": display.describe(),
+                    "runtime_colour_space": RUNTIME_COLOUR_SPACE,
+                    "display_inverse_cube": "display_inverse.cube",
+                    "display_inverse": "display_inverse.json",
+                    "drive_correction": inverse.correction is not None,
+                    "white_mapping_XYZ": [float(v) for v in white],
+                    "lights_file": "lights.json", "lights": list(light_ids),
+                    "cubes": level2, "apl": None}
+        with atomic_writer(staging / "README.md") as handle:
+            handle.write(_readme(bundle_profile, manifest, accuracy))
+        _write_json(staging / "bundle.json", manifest)
+    return BundleSummary(directory=directory, lights=light_ids, cube_accuracy=accuracy,
+                         cubes=tuple(level2), drive_correction=inverse.correction is not None)

@@ -1,0 +1,229 @@
+// Unity loader of a VR colour workbench runtime bundle (C# 7.2; Unity 2020.1 or newer).
+//
+//   var bundle = VrColourBundle.Load(Path.Combine(Application.streamingAssetsPath, "headset"));
+//   sceneLight.color = bundle.LightColour("cie-d65");          // level 1
+//   bundle.BindLevel2(relightMaterial, "paintings", "cie-d65"); // level 2 (Level2Relight.hlsl)
+//
+// Builds the Texture2DArray of a cube's coefficients (RGBAHalf), the display
+// inverse .cube as a Texture3D (RGBAFloat, bilinear = trilinear in 3D) for a
+// colour-grading step, and the level-2 tables. Reads only data, never code.
+using System;
+using System.Collections.Generic;
+using System.Globalization;
+using System.IO;
+using UnityEngine;
+
+namespace VrColourWorkbench
+{
+    [Serializable] public class BundleCube { public string name; public string folder; public int width; public int height; public int components; public int split; public int channels; public int layers; }
+    [Serializable] public class BundleManifest { public string format; public int format_version; public string profile; public string runtime_colour_space; public string display_inverse_cube; public string display_inverse; public string lights_file; public string[] lights; public BundleCube[] cubes; }
+    [Serializable] public class LightEntry { public string id; public string name; public int[] rgb8; public float[] linear; public float[] XYZ; public float Rf; public float CCT; public bool in_gamut; }
+    [Serializable] public class LightTable { public string format; public int format_version; public LightEntry[] lights; }
+    [Serializable] public class Correction { public int size; public float[] domain; public string file; }
+    [Serializable] public class DisplayInverse { public string format; public int format_version; public float[] thresholds; public Correction correction; }
+    [Serializable] public class CoefficientHeader { public string format; public int format_version; public string file; public int width; public int height; public int components; public int channels; public int layers; public int bytes; }
+    [Serializable] public class Level2Light { public string id; public float[] matrix; public float[] offset; public int[] light_rgb8; public int[] texel_table; public int[] unreachable_dac; }
+    [Serializable] public class Level2Lights { public int components; public int channels; public int layers; public Level2Light[] lights; }
+
+    public sealed class BundleException : Exception
+    {
+        public BundleException(string message) : base(message) { }
+    }
+
+    public sealed class VrColourBundle
+    {
+        public const int SupportedFormatVersion = 1;
+        public const int MaxLayers = 16;
+
+        public string Directory { get; private set; }
+        public BundleManifest Manifest { get; private set; }
+        public LightTable Lights { get; private set; }
+        public Texture2D Thresholds { get; private set; }
+        public Texture3D DriveCorrection { get; private set; }
+        public Vector4 CorrectionDomain { get; private set; }
+        public int CorrectionSize { get; private set; }
+        readonly Dictionary<string, Texture2DArray> coefficients = new Dictionary<string, Texture2DArray>();
+
+        VrColourBundle() { }
+
+        public static VrColourBundle Load(string directory)
+        {
+            var bundle = new VrColourBundle { Directory = directory };
+            bundle.Manifest = ReadJson<BundleManifest>(directory, "bundle.json");
+            if (bundle.Manifest.format != "vr-colour-workbench-bundle")
+                throw new BundleException(directory + ": not a VR colour workbench bundle");
+            if (bundle.Manifest.format_version > SupportedFormatVersion)
+                throw new BundleException(directory + ": bundle format_version " + bundle.Manifest.format_version
+                    + " is newer than this loader supports (" + SupportedFormatVersion + ")");
+            bundle.Lights = ReadJson<LightTable>(directory, bundle.Manifest.lights_file);
+            var inverse = ReadJson<DisplayInverse>(directory, bundle.Manifest.display_inverse);
+            if (inverse.thresholds == null || inverse.thresholds.Length != 3 * 255)
+                throw new BundleException(directory + ": display_inverse.json needs 765 thresholds");
+            bundle.Thresholds = FloatTable(inverse.thresholds, 255);
+            bundle.CorrectionSize = inverse.correction == null ? 0 : inverse.correction.size;
+            if (bundle.CorrectionSize > 0)
+            {
+                int n = bundle.CorrectionSize;
+                byte[] raw = ReadBytes(directory, inverse.correction.file, n * n * n * 3 * 4);
+                var colours = new Color[n * n * n];
+                for (int i = 0; i < colours.Length; ++i)
+                    colours[i] = new Color(ReadSingle(raw, 12 * i), ReadSingle(raw, 12 * i + 4),
+                                           ReadSingle(raw, 12 * i + 8), 1f);
+                var texture = new Texture3D(n, n, n, TextureFormat.RGBAFloat, false);
+                texture.filterMode = FilterMode.Point;
+                texture.wrapMode = TextureWrapMode.Clamp;
+                texture.SetPixels(colours);
+                texture.Apply(false);
+                bundle.DriveCorrection = texture;
+                bundle.CorrectionDomain = new Vector4(inverse.correction.domain[0], inverse.correction.domain[1], 0f, 0f);
+            }
+            return bundle;
+        }
+
+        /// <summary>Level 1: the engine light colour (sRGB-encoded, as Light.color takes it).</summary>
+        public Color LightColour(string id)
+        {
+            foreach (var light in Lights.lights)
+                if (light.id == id)
+                    return new Color32((byte)light.rgb8[0], (byte)light.rgb8[1], (byte)light.rgb8[2], 255);
+            throw new BundleException("no light '" + id + "' in the bundle");
+        }
+
+        /// <summary>The display inverse .cube (engine sRGB output to HMD DAC/255) as a Texture3D.</summary>
+        public Texture3D LoadDisplayInverseCube()
+        {
+            string path = Path.Combine(Directory, Manifest.display_inverse_cube);
+            int size = 0;
+            var colours = new List<Color>();
+            foreach (string line in File.ReadAllLines(path))
+            {
+                string text = line.Trim();
+                if (text.Length == 0 || text.StartsWith("#") || text.StartsWith("TITLE")) continue;
+                string[] parts = text.Split(new[] { ' ', '\t' }, StringSplitOptions.RemoveEmptyEntries);
+                if (parts[0] == "LUT_3D_SIZE") { size = int.Parse(parts[1], CultureInfo.InvariantCulture); continue; }
+                colours.Add(new Color(float.Parse(parts[0], CultureInfo.InvariantCulture),
+                                      float.Parse(parts[1], CultureInfo.InvariantCulture),
+                                      float.Parse(parts[2], CultureInfo.InvariantCulture), 1f));
+            }
+            if (size < 2 || colours.Count != size * size * size)
+                throw new BundleException(path + ": not a complete .cube");
+            var texture = new Texture3D(size, size, size, TextureFormat.RGBAFloat, false);
+            texture.filterMode = FilterMode.Bilinear;  // trilinear across the three axes
+            texture.wrapMode = TextureWrapMode.Clamp;
+            texture.SetPixels(colours.ToArray());      // red fastest, as the .cube
+            texture.Apply(false);
+            return texture;
+        }
+
+        /// <summary>Level 2: the coefficient layers of a cube as a Texture2DArray (RGBAHalf, rows bottom first).</summary>
+        public Texture2DArray LoadCoefficients(string cube)
+        {
+            Texture2DArray cached;
+            if (coefficients.TryGetValue(cube, out cached)) return cached;
+            BundleCube entry = FindCube(cube);
+            var header = ReadJson<CoefficientHeader>(Directory, entry.folder + "/coefficients.json");
+            if (header.layers != (header.channels + 3) / 4 || header.layers > MaxLayers)
+                throw new BundleException(cube + ": inconsistent coefficient header");
+            int rowBytes = header.width * 4 * 2;
+            int layerBytes = rowBytes * header.height;
+            byte[] raw = ReadBytes(Directory, entry.folder + "/" + header.file, layerBytes * header.layers);
+            var texture = new Texture2DArray(header.width, header.height, header.layers, TextureFormat.RGBAHalf, false, true);
+            texture.filterMode = FilterMode.Point;
+            texture.wrapMode = TextureWrapMode.Clamp;
+            var layer = new byte[layerBytes];
+            for (int l = 0; l < header.layers; ++l)
+            {
+                for (int row = 0; row < header.height; ++row)  // the file is top row first; Unity is bottom first
+                    Buffer.BlockCopy(raw, l * layerBytes + row * rowBytes, layer, (header.height - 1 - row) * rowBytes, rowBytes);
+                texture.SetPixelData(layer, 0, l);
+            }
+            texture.Apply(false, true);
+            coefficients[cube] = texture;
+            return texture;
+        }
+
+        /// <summary>Sets every input of Level2Relight.hlsl on a material for one cube and one light.</summary>
+        public void BindLevel2(Material material, string cube, string lightId)
+        {
+            BundleCube entry = FindCube(cube);
+            var table = ReadJson<Level2Lights>(Directory, entry.folder + "/lights.json");
+            Level2Light light = null;
+            foreach (var candidate in table.lights) if (candidate.id == lightId) light = candidate;
+            if (light == null) throw new BundleException(cube + ": no level-2 light '" + lightId + "'");
+            int channels = table.channels;
+            if (light.matrix.Length != 3 * channels || light.texel_table.Length != 768)
+                throw new BundleException(cube + ": malformed level-2 light '" + lightId + "'");
+            var rows = new Vector4[3 * MaxLayers];
+            for (int layer = 0; layer < table.layers; ++layer)
+                for (int output = 0; output < 3; ++output)
+                {
+                    var row = new Vector4();
+                    for (int i = 0; i < 4; ++i)
+                    {
+                        int channel = 4 * layer + i;
+                        row[i] = channel < channels ? light.matrix[output * channels + channel] : 0f;
+                    }
+                    rows[3 * layer + output] = row;
+                }
+            var texels = new float[768];
+            for (int i = 0; i < 768; ++i) texels[i] = light.texel_table[i];
+            material.SetTexture("_VrCoefficients", LoadCoefficients(cube));
+            material.SetTexture("_VrThresholds", Thresholds);
+            material.SetTexture("_VrTexelTable", FloatTable(texels, 256));
+            if (DriveCorrection != null) material.SetTexture("_VrDriveCorrection", DriveCorrection);
+            material.SetVectorArray("_VrMatrixRows", rows);
+            material.SetVector("_VrDriveOffset", new Vector4(light.offset[0], light.offset[1], light.offset[2], 0f));
+            material.SetVector("_VrCorrectionDomain", CorrectionDomain);
+            material.SetInt("_VrLayers", table.layers);
+            material.SetInt("_VrCorrectionSize", CorrectionSize);
+            material.SetVector("_VrUnreachableDac", new Vector4(light.unreachable_dac[0], light.unreachable_dac[1], light.unreachable_dac[2], 0f));
+        }
+
+        BundleCube FindCube(string cube)
+        {
+            if (Manifest.cubes != null)
+                foreach (var entry in Manifest.cubes) if (entry.name == cube) return entry;
+            throw new BundleException("no level-2 cube '" + cube + "' in the bundle");
+        }
+
+        static Texture2D FloatTable(float[] values, int width)
+        {
+            var texture = new Texture2D(width, 3, TextureFormat.RFloat, false, true);
+            texture.filterMode = FilterMode.Point;
+            texture.wrapMode = TextureWrapMode.Clamp;
+            texture.SetPixelData(values, 0);
+            texture.Apply(false);
+            return texture;
+        }
+
+        static T ReadJson<T>(string directory, string name)
+        {
+            string path = Path.Combine(directory, name);
+            if (!File.Exists(path)) throw new BundleException(path + ": missing from the bundle");
+            T value = JsonUtility.FromJson<T>(File.ReadAllText(path));
+            if (value == null) throw new BundleException(path + ": not valid JSON");
+            return value;
+        }
+
+        static byte[] ReadBytes(string directory, string name, int expected)
+        {
+            if (string.IsNullOrEmpty(name) || name.Contains("..")) throw new BundleException("bad file name in the bundle: " + name);
+            string path = Path.Combine(directory, name);
+            if (!File.Exists(path)) throw new BundleException(path + ": missing from the bundle");
+            byte[] raw = File.ReadAllBytes(path);
+            if (raw.Length != expected)
+                throw new BundleException(path + ": " + raw.Length + " bytes where " + expected + " are expected (truncated?)");
+            return raw;
+        }
+
+        static float ReadSingle(byte[] raw, int offset)
+        {
+            if (!BitConverter.IsLittleEndian)
+            {
+                var swapped = new[] { raw[offset + 3], raw[offset + 2], raw[offset + 1], raw[offset] };
+                return BitConverter.ToSingle(swapped, 0);
+            }
+            return BitConverter.ToSingle(raw, offset);
+        }
+    }
+}

@@ -1,0 +1,6 @@
+#version 430
+// Full-screen triangle for the level-2 relight pass: draw 3 vertices, no buffers.
+void main() {
+    vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+    gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
+}
