@@ -2,7 +2,9 @@
 
 For headsets in extended mode (the HMD appears as a second monitor) and for
 ordinary monitors. :class:`PatchWindow` is a borderless full-screen widget of
-one solid colour; :class:`QtPatchDisplay` adapts it to the
+one solid colour, or, for an APL patch, a centred rectangle of the screen's
+aspect ratio covering the fraction ``window`` of its area on a surround colour;
+:class:`QtPatchDisplay` adapts it to the
 :class:`~instruments.patch_display.PatchDisplay` protocol, so that the
 measurement runner, working off the GUI thread, can call ``show(rgb)`` and get
 control back once the window has painted the patch.
@@ -18,11 +20,12 @@ from __future__ import annotations
 import logging
 import threading
 
-from PySide6.QtCore import QMetaObject, QObject, Qt, QThread, Signal, Slot
+from PySide6.QtCore import QMetaObject, QObject, QRect, Qt, QThread, Signal, Slot
 from PySide6.QtGui import QColor, QGuiApplication, QPainter
 from PySide6.QtWidgets import QWidget
 
-from instruments.patch_display import PatchDisplayError, validate_patch_rgb
+from instruments.patch_display import (PatchDisplayError, is_apl_patch, validate_patch_rgb,
+                                       validate_patch_window)
 from workbench.errors import InputError
 
 __all__ = ["PatchWindow", "QtPatchDisplay", "screen_names"]
@@ -38,7 +41,7 @@ def screen_names() -> list[str]:
 
 
 class PatchWindow(QWidget):
-    """A borderless full-screen window of one solid colour.
+    """A borderless full-screen window of one solid colour, or of a patch on a surround.
 
     Parameters
     ----------
@@ -79,26 +82,54 @@ class PatchWindow(QWidget):
             _LOG.warning("screen %s has a colour depth of %d bits: patches will be quantised; "
                          "set it to 24-bit colour before measuring", screen.name(), screen.depth())
         self._rgb = [0, 0, 0]
+        self._window = 1.0
+        self._surround = [0, 0, 0]
         self.paint_count = 0
         self.last_painted: list | None = None
+        self.last_painted_frame: tuple | None = None
 
     @property
     def rgb(self) -> list:
         """The DAC values of the patch on screen."""
         return list(self._rgb)
 
+    @property
+    def frame(self) -> tuple:
+        """``(rgb, window, surround)`` of the frame on screen."""
+        return list(self._rgb), self._window, list(self._surround)
+
     @Slot(list)
     def set_patch(self, rgb: list) -> None:
-        """Show ``rgb`` (GUI thread): repaint at once."""
+        """Show ``rgb`` full field (GUI thread): repaint at once."""
+        self.set_frame(rgb, 1.0, [0, 0, 0])
+
+    @Slot(list, float, list)
+    def set_frame(self, rgb: list, window: float, surround: list) -> None:
+        """Show ``rgb`` as ``window`` of the screen's area, centred, on ``surround`` (GUI thread)."""
         self._rgb = validate_patch_rgb(rgb)
+        self._window = validate_patch_window(window)
+        self._surround = validate_patch_rgb(surround)
         self.repaint()
+
+    def patch_rect(self):
+        """The rectangle the patch fills: centred, the screen's aspect ratio, ``sqrt(window)`` of its sides."""
+        rect = self.rect()
+        if self._window >= 1.0:
+            return rect
+        scale = self._window ** 0.5
+        width, height = max(1, round(rect.width() * scale)), max(1, round(rect.height() * scale))
+        return QRect(rect.x() + (rect.width() - width) // 2, rect.y() + (rect.height() - height) // 2,
+                     width, height)
 
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt's name
         painter = QPainter(self)
-        painter.fillRect(self.rect(), QColor(*self._rgb))
+        if self._window < 1.0:
+            painter.fillRect(self.rect(), QColor(*self._surround))
+        painter.fillRect(self.patch_rect(), QColor(*self._rgb))
         painter.end()
         self.paint_count += 1
         self.last_painted = list(self._rgb)
+        self.last_painted_frame = self.frame
         self.painted.emit(list(self._rgb))
 
 
@@ -106,6 +137,7 @@ class _Bridge(QObject):
     """Carries ``show`` requests from a worker thread to the GUI thread."""
 
     request = Signal(list)
+    frame_request = Signal(list, float, list)
 
 
 class QtPatchDisplay:
@@ -128,25 +160,33 @@ class QtPatchDisplay:
         self._bridge = _Bridge()
         self._bridge.moveToThread(window.thread())
         self._bridge.request.connect(window.set_patch, Qt.ConnectionType.QueuedConnection)
+        self._bridge.frame_request.connect(window.set_frame, Qt.ConnectionType.QueuedConnection)
         self._painted = threading.Event()
-        self._wanted: list | None = None
+        self._wanted: tuple | None = None
         window.painted.connect(self._on_painted, Qt.ConnectionType.DirectConnection)
         if not window.isVisible():
             window.showFullScreen()
 
     def _on_painted(self, rgb: list) -> None:
-        if rgb == self._wanted:
+        if self.window.last_painted_frame == self._wanted:
             self._painted.set()
 
-    def show(self, rgb_dac) -> None:
-        """Show ``rgb_dac`` and return once the window has painted it."""
+    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
+        """Show ``rgb_dac`` (as ``window`` of the screen on ``surround``); return once painted."""
         rgb = validate_patch_rgb(rgb_dac)
+        if is_apl_patch(window, surround):
+            frame = (rgb, validate_patch_window(window), validate_patch_rgb(surround))
+        else:
+            frame = (rgb, 1.0, [0, 0, 0])
         if QThread.currentThread() is self.window.thread():
-            self.window.set_patch(rgb)
+            self.window.set_frame(*frame)
             return
         self._painted.clear()
-        self._wanted = rgb
-        self._bridge.request.emit(rgb)
+        self._wanted = frame
+        if frame[1] < 1.0:
+            self._bridge.frame_request.emit(*frame)
+        else:
+            self._bridge.request.emit(rgb)
         if not self._painted.wait(self.timeout_s):
             raise PatchDisplayError(
                 f"the patch window did not paint {rgb} within {self.timeout_s:g} s; "
