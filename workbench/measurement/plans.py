@@ -1,9 +1,10 @@
 """Measurement plans: which patches a calibration shows, in which order.
 
 A plan is a sequence of :class:`Patch` (a session kind and the DAC triplet to
-show). :data:`MEASUREMENT_PLANS` holds the built-in plans and
+show, full field or, for an APL patch, as a centred window of the field on a
+surround). :data:`MEASUREMENT_PLANS` holds the built-in plans and
 :func:`measurement_plan` picks one by name; :func:`read_plan_file` reads a plan
-from a CSV file with columns ``kind,r,g,b``.
+from a CSV file with columns ``kind,r,g,b`` and optionally ``window,sr,sg,sb``.
 
 Built-in plans
 --------------
@@ -15,6 +16,20 @@ Built-in plans
 ``quick``
     The same structure with five levels per channel (51 to 255 in steps of 51)
     and 10 validation colours, for a fast look (28 patches).
+``apl``
+    For ``apl-dependence`` (OLED brightness limiting): white and mid grey (128)
+    as windows of :data:`APL_WINDOWS` of the field on black, and white and mid
+    grey as a :data:`APL_SMALL_WINDOW` window on grey surrounds of
+    :data:`APL_SURROUNDS`, in a seeded random order, with a full-field white
+    reference after every :data:`APL_REFERENCE_INTERVAL` patches and at both
+    ends (these are also the drift references). White and grey APL patches
+    have kind ``grey`` (only a full-field white is a ``white`` reference). 31
+    patches (25 APL patches, 6 whites); 2.1 min of modelled CS-2000 time on
+    the clean simulated headset (every patch is bright).
+``paper+apl``
+    ``paper`` followed by the ``apl`` block: 244 patches, 69.3 min of
+    modelled CS-2000 time on the clean simulated headset (the ``paper``
+    part's dark patches dominate).
 """
 
 from __future__ import annotations
@@ -30,6 +45,13 @@ from workbench.errors import InputError, SpectrumFileError
 from workbench.session import SESSION_KINDS
 
 __all__ = [
+    "APL_WINDOWS",
+    "APL_SMALL_WINDOW",
+    "APL_SURROUNDS",
+    "APL_REFERENCE_INTERVAL",
+    "apl_block",
+    "measurement_plan_apl",
+    "measurement_plan_paper_apl",
     "Patch",
     "MeasurementPlan",
     "DRIFT_REFERENCE_INTERVAL",
@@ -42,6 +64,20 @@ __all__ = [
 
 DRIFT_REFERENCE_INTERVAL = 25
 """A white drift reference is shown after this many patches without one."""
+
+APL_WINDOWS = (0.01, 0.03, 0.1, 0.2, 0.35, 0.5, 0.75)
+"""Window sizes (fractions of the field) of the ``apl`` plan's patches on black (and full field)."""
+
+APL_SMALL_WINDOW = 0.03
+"""Window size of the ``apl`` plan's patches on a lit surround."""
+
+APL_SURROUNDS = (32, 64, 128, 192, 255)
+"""Grey surround levels (DAC) of the ``apl`` plan's small-window patches."""
+
+APL_REFERENCE_INTERVAL = 6
+"""The ``apl`` plan shows a full-field white after this many APL patches."""
+
+_APL_GREY = 128
 
 _BLACK, _WHITE = (0, 0, 0), (255, 255, 255)
 _RAMP_KINDS = {"ramp-r": 0, "ramp-g": 1, "ramp-b": 2}
@@ -57,14 +93,28 @@ class Patch:
         A session kind (``black``, ``white``, ``ramp-r`` … ``validation``).
     rgb : (int, int, int)
         DAC values to show, 0..255.
+    window : float
+        Fraction of the field the patch covers, 0 < window <= 1 (1: full field).
+    surround : (int, int, int)
+        DAC values of the rest of the field (black by default).
     """
 
     kind: str
     rgb: tuple
+    window: float = 1.0
+    surround: tuple = (0, 0, 0)
+
+    @property
+    def is_apl(self) -> bool:
+        """Whether the patch is shown as a window on a surround (not full field)."""
+        return self.window < 1.0
 
     def describe(self) -> str:
-        """E.g. ``"ramp-g (0, 35, 0)"``."""
-        return f"{self.kind} ({self.rgb[0]}, {self.rgb[1]}, {self.rgb[2]})"
+        """E.g. ``"ramp-g (0, 35, 0)"`` or ``"grey (255, 255, 255) in 3 % of the field on (64, 64, 64)"``."""
+        text = f"{self.kind} ({self.rgb[0]}, {self.rgb[1]}, {self.rgb[2]})"
+        if self.is_apl:
+            text += f" in {100 * self.window:g} % of the field on ({', '.join(map(str, self.surround))})"
+        return text
 
 
 @dataclass(frozen=True)
@@ -108,6 +158,22 @@ def _ramps(levels) -> list:
 def _validation(count: int, seed: int) -> list:
     rng = np.random.default_rng(seed)
     return [Patch("validation", tuple(int(v) for v in rgb)) for rgb in rng.integers(0, 256, size=(count, 3))]
+
+
+def apl_block(seed: int) -> list:
+    """The APL patches of the ``apl`` plan, in a seeded random order, without references.
+
+    White and mid grey on black at each of :data:`APL_WINDOWS` and full field,
+    and white and mid grey in a :data:`APL_SMALL_WINDOW` window on each grey of
+    :data:`APL_SURROUNDS`.
+    """
+    grey = (_APL_GREY,) * 3
+    patches = [Patch("grey", rgb, window) for window in APL_WINDOWS for rgb in (_WHITE, grey)]
+    patches.append(Patch("grey", grey))  # the mid grey full field (its reference load)
+    patches += [Patch("grey", rgb, APL_SMALL_WINDOW, (level,) * 3)
+                for level in APL_SURROUNDS for rgb in (_WHITE, grey)]
+    order = np.random.default_rng([int(seed), 0xA91]).permutation(len(patches))
+    return [patches[i] for i in order]
 
 
 def _with_drift_references(patches: list, interval: int = DRIFT_REFERENCE_INTERVAL) -> tuple:
@@ -155,9 +221,36 @@ def measurement_plan_quick(seed: int) -> MeasurementPlan:
     return _plan("quick", range(51, 256, 51), 10, seed)
 
 
+def measurement_plan_apl(seed: int) -> MeasurementPlan:
+    """The ``apl`` plan: APL patches (:func:`apl_block`) with full-field white references between.
+
+    Parameters
+    ----------
+    seed : int
+        Seeds the order of the APL patches.
+
+    Returns
+    -------
+    MeasurementPlan
+        31 patches: 6 full-field whites (first, last and after every
+        :data:`APL_REFERENCE_INTERVAL` APL patches), 25 APL patches.
+    """
+    patches = [Patch("white", _WHITE), *apl_block(seed)]
+    return MeasurementPlan("apl", _with_drift_references(patches, APL_REFERENCE_INTERVAL), seed)
+
+
+def measurement_plan_paper_apl(seed: int) -> MeasurementPlan:
+    """The paper's plan followed by the ``apl`` block (its APL patches with white references between)."""
+    paper = measurement_plan_paper(seed).patches
+    block = _with_drift_references([Patch("white", _WHITE), *apl_block(seed)], APL_REFERENCE_INTERVAL)
+    return MeasurementPlan("paper+apl", paper + block[1:], seed)
+
+
 MEASUREMENT_PLANS = {
     "paper": measurement_plan_paper,
     "quick": measurement_plan_quick,
+    "apl": measurement_plan_apl,
+    "paper+apl": measurement_plan_paper_apl,
 }
 """Built-in plans by name: each a function of the validation seed."""
 
@@ -187,7 +280,9 @@ def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
     ----------
     path : path-like
         One row per patch, in the order to show them; ``kind`` is a session
-        kind, ``r,g,b`` are integer DAC values 0..255.
+        kind, ``r,g,b`` are integer DAC values 0..255; optional ``window`` (the
+        patch's fraction of the field, default 1) and ``sr,sg,sb`` (the
+        surround's DAC values, default 0) make APL patches.
 
     Returns
     -------
@@ -223,7 +318,8 @@ def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
             if kind not in SESSION_KINDS:
                 raise SpectrumFileError(path, line, f"unknown kind {kind!r}", f"use one of {', '.join(SESSION_KINDS)}")
             rgb = []
-            for channel in "rgb":
+            surround_columns = [c for c in ("sr", "sg", "sb") if c in columns]
+            for channel in ("r", "g", "b", *surround_columns):
                 text = row[columns[channel]].strip()
                 try:
                     value = int(text)
@@ -233,7 +329,21 @@ def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
                     raise SpectrumFileError(path, line, f"column {channel!r} holds {text!r}",
                                             "write an integer DAC value 0..255")
                 rgb.append(value)
-            patches.append(Patch(kind, tuple(rgb)))
+            if surround_columns and len(surround_columns) != 3:
+                raise SpectrumFileError(path, 1, f"the header has {surround_columns} but not all of sr,sg,sb",
+                                        "give the surround as three columns sr,sg,sb or none")
+            window = 1.0
+            if "window" in columns:
+                text = row[columns["window"]].strip()
+                try:
+                    window = float(text)
+                except ValueError:
+                    window = float("nan")
+                if not 0 < window <= 1:
+                    raise SpectrumFileError(path, line, f"column 'window' holds {text!r}",
+                                            "write the patch's fraction of the field, 0 < window <= 1")
+            surround = tuple(rgb[3:]) if surround_columns else (0, 0, 0)
+            patches.append(Patch(kind, tuple(rgb[:3]), window, surround))
     if not patches:
         raise SpectrumFileError(path, None, "the file has a header but no patches", "add one row kind,r,g,b per patch")
     return MeasurementPlan(str(path), tuple(patches), None)
