@@ -190,10 +190,20 @@ def show_patch(display, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> Non
     So that displays which show full-field patches only (``show(rgb)``) keep
     working for every plan without APL patches.
     """
-    if is_apl_patch(window, surround):
-        display.show(rgb_dac, window=window, surround=surround)
-    else:
+    if not is_apl_patch(window, surround):
         display.show(rgb_dac)
+        return
+    try:
+        display.show(rgb_dac, window=window, surround=surround)
+    except TypeError as error:
+        if "window" not in str(error) and "surround" not in str(error):
+            raise
+        describe = getattr(display, "describe", lambda: type(display).__name__)
+        raise AplPatchesUnsupported(
+            f"{describe()} cannot show APL patches (a patch as a window on a surround): its show() takes "
+            "no 'window' or 'surround'; show the patches in the full-screen window or a VR application "
+            "whose patch server accepts them, or measure a plan without APL patches (e.g. --plan paper)"
+        ) from error
 
 
 def encode_message(message: dict) -> bytes:

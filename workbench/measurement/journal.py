@@ -134,7 +134,8 @@ class JournalHeader:
             "plan": {
                 "name": self.plan.name,
                 "seed": self.plan.seed,
-                "patches": [[p.kind, *p.rgb] for p in self.plan.patches],
+                "patches": [[p.kind, *p.rgb, p.window, *p.surround] if p.is_apl else [p.kind, *p.rgb]
+                            for p in self.plan.patches],
             },
             "instrument": self.instrument,
             "display": self.display,
@@ -144,7 +145,9 @@ class JournalHeader:
     @classmethod
     def from_json(cls, data: dict) -> "JournalHeader":
         plan = data["plan"]
-        patches = tuple(Patch(str(kind), (int(r), int(g), int(b))) for kind, r, g, b in plan["patches"])
+        patches = tuple(Patch(str(entry[0]), tuple(int(v) for v in entry[1:4]),
+                              *((float(entry[4]), tuple(int(v) for v in entry[5:8])) if len(entry) == 8 else ()))
+                        for entry in plan["patches"])
         return cls(
             plan=MeasurementPlan(str(plan["name"]), patches, plan.get("seed")),
             instrument=dict(data.get("instrument") or {}),
@@ -190,6 +193,10 @@ class JournalRecord:
     warning : str
         What is missing from an ``ok`` record and why (empty when nothing is),
         e.g. a spectrum the instrument could not compute.
+    window : float
+        Fraction of the field the patch covered (1: full field).
+    surround : (int, int, int)
+        DAC values of the rest of the field.
     """
 
     index: int
@@ -207,13 +214,15 @@ class JournalRecord:
     spectrum: np.ndarray | None = field(default=None, compare=False)
     reason: str = ""
     warning: str = ""
+    window: float = 1.0
+    surround: tuple = (0, 0, 0)
 
     @property
     def ok(self) -> bool:
         return self.status == "ok"
 
     def patch(self) -> Patch:
-        return Patch(self.kind, tuple(self.rgb))
+        return Patch(self.kind, tuple(self.rgb), self.window, tuple(self.surround))
 
     def to_json(self) -> dict:
         data = {
@@ -225,6 +234,8 @@ class JournalRecord:
             "t_s": round(self.t_s, 6),
             "duration_s": round(self.duration_s, 6),
         }
+        if self.window < 1.0:  # an APL patch: a window on a surround
+            data.update(window=self.window, surround=list(self.surround))
         if self.ok:
             data.update(
                 XYZ=list(self.XYZ),
@@ -269,6 +280,8 @@ class JournalRecord:
             spectrum=values,
             reason=str(data.get("reason", "")),
             warning=str(data.get("warning", "")),
+            window=float(data.get("window", 1.0)),
+            surround=tuple(int(v) for v in data.get("surround", (0, 0, 0))),
         )
 
 
@@ -550,6 +563,7 @@ def journal_to_session(journal: Journal) -> Session:
             spectra = np.array([r.spectrum for r in records])
         else:
             wavelengths = None
+    apl = any(r.window < 1.0 for r in records)  # window/surround columns only where a patch needs them
     return Session(
         kind=np.array([r.kind for r in records], dtype=object),
         rgb=np.array([r.rgb for r in records], dtype=float),
@@ -560,4 +574,6 @@ def journal_to_session(journal: Journal) -> Session:
         source=str(journal.path),
         metadata={"plan": journal.header.plan.name, "instrument": journal.header.instrument,
                   "display": journal.header.display, "software": journal.header.software},
+        window=np.array([r.window for r in records]) if apl else None,
+        surround=np.array([r.surround for r in records], dtype=float) if apl else None,
     )

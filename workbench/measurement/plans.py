@@ -24,7 +24,7 @@ Built-in plans
     reference after every :data:`APL_REFERENCE_INTERVAL` patches and at both
     ends (these are also the drift references). White and grey APL patches
     have kind ``grey`` (only a full-field white is a ``white`` reference). 31
-    patches (25 APL patches, 6 whites); 2.1 min of modelled CS-2000 time on
+    patches (24 APL patches, the mid grey full field, 6 whites); 2.1 min of modelled CS-2000 time on
     the clean simulated headset (every patch is bright).
 ``paper+apl``
     ``paper`` followed by the ``apl`` block: 244 patches, 69.3 min of
@@ -233,7 +233,8 @@ def measurement_plan_apl(seed: int) -> MeasurementPlan:
     -------
     MeasurementPlan
         31 patches: 6 full-field whites (first, last and after every
-        :data:`APL_REFERENCE_INTERVAL` APL patches), 25 APL patches.
+        :data:`APL_REFERENCE_INTERVAL` patches of the block), 24 APL patches
+        and the mid grey full field.
     """
     patches = [Patch("white", _WHITE), *apl_block(seed)]
     return MeasurementPlan("apl", _with_drift_references(patches, APL_REFERENCE_INTERVAL), seed)

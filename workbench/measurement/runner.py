@@ -54,7 +54,7 @@ from typing import Any, Callable, Iterator, Protocol
 import numpy as np
 
 from instruments.cs2000 import CS2000Error, MeasurementCancelled, PortVanishedError
-from instruments.patch_display import PatchDisplayError
+from instruments.patch_display import PatchDisplayError, show_patch
 from workbench.errors import InputError, WorkbenchError
 from workbench.measurement.eta import PatchDurationModel
 from workbench.measurement.journal import (
@@ -531,7 +531,7 @@ class MeasurementRun:
         wall_start = self.wall_clock()
         t_s = self.clock.now()
         try:
-            self.display.show(list(patch.rgb))
+            show_patch(self.display, list(patch.rgb), patch.window, list(patch.surround))
         except PatchDisplayError as error:
             raise RunAborted(f"the display failed to show {where}: {error}. {resume_hint}", index, patch) from error
         if self.settle_s > 0:
@@ -569,6 +569,7 @@ class MeasurementRun:
         xy = _finite_or_none(measurement.xy)
         record = JournalRecord(
             index=index, kind=patch.kind, rgb=patch.rgb, status="ok", t_s=t_s,
+            window=patch.window, surround=tuple(patch.surround),
             duration_s=self.clock.now() - t_s, XYZ=tuple(XYZ),
             Lv=float(measurement.Lv) if math.isfinite(measurement.Lv) else XYZ[1],
             xy=None if xy is None else tuple(xy),
@@ -582,6 +583,7 @@ class MeasurementRun:
 
     def _failed(self, index: int, patch: Patch, t_s: float, wall_start: float, reason: str):
         record = JournalRecord(index=index, kind=patch.kind, rgb=patch.rgb, status="failed", t_s=t_s,
+                               window=patch.window, surround=tuple(patch.surround),
                                duration_s=self.clock.now() - t_s, reason=reason)
         return record, self.wall_clock() - wall_start
 
@@ -598,6 +600,8 @@ class MeasurementRun:
         if not np.any(session.mask("white") | np.all(session.rgb >= 255, axis=1)):
             _LOG.warning("no white measured: %s not written (it is normalised to white)", SESSION_TI3_NAME)
             return (csv_path,)
+        if session.has_surround_data:  # a .ti3 has no window/surround: it gets the full-field patches
+            session = session.subset(session.window_or_full >= 1)
         ti3_path = write_session_ti3(session, self.out_dir / SESSION_TI3_NAME,
                                      instrument=f"Konica Minolta {instrument}".strip())
         return csv_path, ti3_path
