@@ -3,6 +3,9 @@
 - ``vrprofile.schema.json``: the JSON Schema every ``*.vrprofile.json`` follows.
 - ``htc-vive-paper.vrprofile.json``: the HTC Vive of Díaz-Barrancas et al. (2020),
   Table 1, written by :func:`workbench.profile.paper_vive_profile`.
+- ``simulated-headset.vrprofile.json``: the simulated headset of ``make demo``
+  (10 % channel interaction, 0.6 % black) calibrated and diagnosed: an extended
+  model, written by :func:`workbench.profile.simulated_headset_profile`.
 """
 
 from pathlib import Path

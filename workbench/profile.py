@@ -55,6 +55,8 @@ __all__ = [
     "save_profile",
     "light_entries",
     "paper_vive_profile",
+    "SIMULATED_HEADSET_EFFECTS",
+    "simulated_headset_profile",
 ]
 
 PROFILE_FORMAT = "vr-colour-workbench-profile"
@@ -384,3 +386,33 @@ def paper_vive_profile() -> Profile:
         created="2020-09-27T00:00:00+00:00",
     )
     return profile.with_lights(PAPER_SOURCES)
+
+
+SIMULATED_HEADSET_EFFECTS = {"channel-interaction": 0.1, "black-offset": 0.006}
+"""The effects hidden in the simulated headset of ``make demo`` and the shipped simulated profile."""
+
+
+def simulated_headset_profile(seed: int = 1) -> Profile:
+    """The simulated headset of ``make demo``, calibrated and diagnosed: an extended-model profile.
+
+    The paper's measurement plan on the simulated headset with
+    :data:`SIMULATED_HEADSET_EFFECTS` hidden in it (instrument noise seeded
+    with ``seed``), diagnosed, and exported as ``diagnose --export`` does;
+    ``profiles/simulated-headset.vrprofile.json`` is this profile.
+    """
+    import tempfile
+
+    from workbench.cli.diagnose import export_profile
+    from workbench.diagnostics import diagnose
+    from workbench.simulated_sessions import simulate_session
+
+    diagnosis = diagnose(simulate_session(dict(SIMULATED_HEADSET_EFFECTS), seed=seed))
+    with tempfile.TemporaryDirectory() as folder:
+        profile = load_profile(export_profile(diagnosis, Path(folder) / "p.vrprofile.json"))
+    effects = ", ".join(f"{name} {value:g}" for name, value in SIMULATED_HEADSET_EFFECTS.items())
+    return replace(profile, device={
+        "name": "Simulated headset (make demo)",
+        "description": f"the workbench's simulated OLED headset with {effects}, measured with the "
+                       f"paper's plan through the CS-2000 model (seed {seed}) and diagnosed",
+        "source": "workbench.profile.simulated_headset_profile"},
+        created="2026-01-01T00:00:00+00:00")
