@@ -4,7 +4,7 @@
 
     vr-workbench measure (--simulate [--effect ID[:MAGNITUDE]]... [--time-scale S] | --port DEVICE|auto)
                          [--display simulated|window[:SCREEN]|tcp:HOST:PORT]
-                         [--plan paper|quick | --plan-file FILE]
+                         [--plan paper|quick|apl|paper+apl | --plan-file FILE]
                          [--seed N] --out DIR [--resume]
 
 Writes ``DIR/journal.jsonl`` as it goes (one fsynced line per patch), then
@@ -24,6 +24,14 @@ without ``--seed`` a fresh noise seed is drawn), and the journal keeps it.
 A resumed simulation draws its noise from ``SeedSequence([seed, k])`` for
 its k-th resume, recorded in the journal's resume record, so that it does not
 repeat the noise of the measurements already made.
+
+``--plan apl`` (or ``paper+apl``) measures APL patches: white and mid grey
+as windows of the field on black and on grey surrounds, for the
+``apl-dependence`` diagnosis of OLED brightness limiting; the display must
+show a patch as a window on a surround (the simulated headset, the window,
+or a patch server that accepts the protocol's ``window`` and ``surround``
+fields; another stops the run at the first APL patch with a message).
+``--effect apl-dependence[:LOSS]`` gives the simulated headset such a limiter.
 
 ``--port auto`` finds the CS-2000 by its USB VID/PID (0x132B/0x2104); with
 none or several connected it stops with a list of the candidate ports.
