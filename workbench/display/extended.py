@@ -10,9 +10,16 @@
   ``xy_full + a₁(1 − d) + a₂(1 − d)²`` per coordinate, fitted to the
   black-subtracted sweep (Psychtoolbox's multiple primary bases do the same
   job with spectra).
-- ``s(load) = 1 − a · clip((load − knee)/(1 − knee), 0, 1)``, ``load`` the mean of the
-  ``L_c``: channel interaction (OLED power limiting, or a supply that sags);
-  ``a < 0`` is super-additivity.
+- ``s``: channel interaction, in one of two forms.
+  *Per-channel co-drive* (``amounts`` set): each channel's light is scaled by
+  ``s_c = 1 − a_c · m^p`` with ``m = (Σ L − max L) / 2`` the light of the
+  channels beyond the brightest (0 for a single channel, 1 for white), so
+  the sweeps are untouched and the white fixes ``a_c`` exactly in X, Y and Z
+  (a chromatic non-additivity: crosstalk, an LCD's dynamic-contrast
+  backlight, ``a_c < 0``); ``p`` is chosen on greys where the session has them.
+  *Load knee* (legacy, ``amounts`` None): one gain
+  ``s = 1 − a · clip((load − knee)/(1 − knee), 0, 1)``, ``load`` the mean of the
+  ``L_c`` (OLED power limiting); ``a < 0`` is super-additivity.
 - ``u(x, y) = (x/y, 1, (1 − x − y)/y)``, ``Y_c`` the full-drive luminance.
 
 The inverse iterates (fixed point on the per-channel luminances, 3×3 solve per
@@ -51,14 +58,44 @@ class ChromaticityDrift:
 
 @dataclass(frozen=True)
 class ChannelInteraction:
-    """Load-dependent gain ``s = 1 − amount · clip((load − knee)/(1 − knee), 0, 1)``."""
+    """Channel interaction (module doc): per-channel co-drive gains, or the legacy load knee.
+
+    Attributes
+    ----------
+    amount : float
+        Loss at white in Y (the legacy form's ``a``; for the per-channel form
+        the luminance-weighted mean of ``amounts``, for reference).
+    knee : float
+        Legacy form: the load where the gain starts to fall.
+    amounts : tuple of 3 floats, optional
+        Per-channel ``a_c`` of the co-drive form.
+    exponent : float
+        ``p`` of the co-drive form.
+    """
 
     amount: float
     knee: float = 1.0 / 3.0
+    amounts: tuple | None = None
+    exponent: float = 2.0
 
     def gain(self, load: np.ndarray) -> np.ndarray:
+        """Legacy form: the one gain at mean load ``load``."""
         excess = np.clip((load - self.knee) / (1.0 - self.knee), 0.0, 1.0)
         return 1.0 - self.amount * excess
+
+    def channel_gains(self, output: np.ndarray) -> np.ndarray:
+        """Gain (..., 3) of each channel's light at channel outputs ``output`` (..., 3)."""
+        output = np.clip(output, 0.0, 1.0)
+        if self.amounts is None:
+            return np.repeat(self.gain(output.mean(axis=-1))[..., None], 3, axis=-1)
+        codrive = (output.sum(axis=-1) - output.max(axis=-1)) / 2.0
+        return 1.0 - np.asarray(self.amounts) * (codrive ** self.exponent)[..., None]
+
+    def to_json(self) -> dict:
+        if self.amounts is None:
+            return {"amount": self.amount, "knee": self.knee}
+        return {"amount": self.amount, "amounts": [float(a) for a in self.amounts],
+                "exponent": self.exponent}
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,16 +146,16 @@ class ExtendedDisplay(DisplayModel):
         return np.stack([self.tone[c].inverse(output[..., c]) for c in range(3)], axis=-1)
 
     def _gain(self, output: np.ndarray) -> np.ndarray:
+        """Gain (..., 3) of each channel's light."""
         if self.interaction is None:
-            return np.ones(output.shape[:-1])
-        return self.interaction.gain(output.mean(axis=-1))
+            return np.ones(output.shape)
+        return self.interaction.channel_gains(output)
 
     def forward(self, rgb) -> np.ndarray:
         drive = as_dac(rgb) / 255.0
         output = self._tone(drive)
         vectors = self._luminance_vectors(drive)
-        contribution = np.einsum("...ij,...j->...i", vectors, output)
-        return self.black + self._gain(output)[..., None] * contribution
+        return self.black + np.einsum("...ij,...j->...i", vectors, output * self._gain(output))
 
     def linear_drive(self, XYZ) -> np.ndarray:
         """Unclipped normalized channel outputs ``L`` that reproduce ``XYZ``."""
@@ -129,7 +166,7 @@ class ExtendedDisplay(DisplayModel):
         for _ in range(1 if simple else self.iterations):
             vectors = self._luminance_vectors(drive)
             gain = self._gain(np.clip(output, 0.0, 1.0))
-            new = np.linalg.solve(vectors, (target / gain[..., None])[..., None])[..., 0]
+            new = np.linalg.solve(vectors, target[..., None])[..., 0] / gain
             if np.allclose(new, output, rtol=0, atol=1e-10):
                 output = new
                 break
@@ -150,8 +187,7 @@ class ExtendedDisplay(DisplayModel):
             "tone": [curve.to_json() for curve in self.tone],
             "chromaticity": [None if t is None else [list(r) for r in t.coefficients]
                              for t in self.chromaticity],
-            "interaction": None if self.interaction is None else {
-                "amount": self.interaction.amount, "knee": self.interaction.knee},
+            "interaction": None if self.interaction is None else self.interaction.to_json(),
         }
 
     @classmethod
@@ -163,7 +199,9 @@ class ExtendedDisplay(DisplayModel):
             tone=tuple(tone_curve_from_parameters(t) for t in parameters["tone"]),
             chromaticity=tuple(None if t is None else ChromaticityDrift(
                 tuple(tuple(r) for r in t)) for t in parameters["chromaticity"]),
-            interaction=None if interaction is None else ChannelInteraction(**interaction),
+            interaction=None if interaction is None else ChannelInteraction(**{
+                **interaction, **({"amounts": tuple(interaction["amounts"])}
+                                  if interaction.get("amounts") is not None else {})}),
             components=tuple(parameters.get("components", ())),
         )
 
