@@ -34,6 +34,10 @@ def test_curve_predicts_held_out_window_sizes(seed):
         # the load term must at least halve the held-out luminance error at loads the fit did not see
         assert score.luminance_error_pct < 0.5 * score.luminance_error_pct_without, score.one_line()
         assert score.dE00 < score.dE00_without, score.one_line()
+    # the full-field fold: the highest loads, beyond every load the fit saw
+    score = evaluate_apl_holdout(session, labels["window size"], "window size")
+    (full,) = [fold for fold in score.folds if fold.label == "window 1"]
+    assert full.luminance_error_pct < 0.5 * full.luminance_error_pct_without, full
 
 
 def test_held_out_error_is_small_where_the_fit_interpolates():
