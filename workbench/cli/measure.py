@@ -114,7 +114,7 @@ def register(subparsers) -> None:
                              "extended mode), or a VR application's patch server")
     plans = parser.add_mutually_exclusive_group()
     plans.add_argument("--plan", choices=sorted(MEASUREMENT_PLANS), help="built-in plan (default paper)")
-    plans.add_argument("--plan-file", metavar="FILE", help="CSV plan with columns kind,r,g,b")
+    plans.add_argument("--plan-file", metavar="FILE", help="CSV plan with columns kind,r,g,b (and optionally window,sr,sg,sb)")
     parser.add_argument("--seed", type=int, help="seed of the validation colours and, with --simulate, the "
                                                  "instrument noise (default: a fresh one, kept in the journal)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
