@@ -79,13 +79,19 @@ def test_profile_change_relights(page):
     assert "ideal sRGB" in page.caption.text()
 
 
-def test_save_screenshot_is_not_black(page, tmp_path):
+def test_save_screenshot_shows_the_3d_views(page, tmp_path):
+    from PySide6.QtCore import QPoint
     from PySide6.QtGui import QImage
 
     path = tmp_path / "scene.png"
     page.save_screenshot(path)
     image = QImage(str(path))
-    assert image.width() == page.width()
-    centre = page.plotter.mapTo(page, page.plotter.rect().center())
-    colour = image.pixelColor(centre.x() // 2, centre.y())
-    assert max(colour.red(), colour.green(), colour.blue()) > 40
+    assert (image.width(), image.height()) == (page.width(), page.height())
+    for level, index in ((1, 0), (2, 18)):
+        column, row = page.patch_screen_point(level, index)
+        at = page.plotter.mapTo(page, QPoint(column, row))
+        colour = image.pixelColor(at.x(), at.y())
+        expected = page.level_images(level).patch_rgb8[index]
+        assert abs(colour.red() - int(expected[0])) <= 2, (level, index)
+        assert abs(colour.green() - int(expected[1])) <= 2
+        assert abs(colour.blue() - int(expected[2])) <= 2

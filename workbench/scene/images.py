@@ -161,11 +161,16 @@ def board_patch_centre_uv(index: int, shape: tuple[int, int] | None = None) -> t
 @lru_cache(maxsize=1)
 def scene_content() -> SceneContent:
     """The booth's surfaces: the ColorChecker and plate :data:`SCENE_PLATE_NUMBER` of the paper's set."""
-    from workbench.ishihara import generate_plate_set
-    from workbench.ishihara.plates import paper_coloured_plate
+    from workbench.ishihara.plates import (
+        generate_plate,
+        paper_coloured_plate,
+        paper_plate_set_specs,
+    )
 
     patches = colorchecker()
-    plate = paper_coloured_plate(generate_plate_set()[SCENE_PLATE_NUMBER - 1])
+    # The plate exactly as generate_plate_set() makes it, without generating the other nine.
+    spec = paper_plate_set_specs()[SCENE_PLATE_NUMBER - 1]
+    plate = paper_coloured_plate(generate_plate(spec))
     plate_reflectances = np.vstack([plate.paper_reflectance[None, :], plate.dot_reflectances])
     wall = np.full((1, patches.reflectances.shape[1]), BOOTH_WALL_REFLECTANCE)
     return SceneContent(

@@ -11,6 +11,8 @@ flat textured patches gain nothing from it.
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 from PySide6.QtCore import QPoint, Qt, Signal
 from PySide6.QtGui import QColor, QImage, QPainter
@@ -19,6 +21,7 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QHeaderView,
     QLabel,
+    QSizePolicy,
     QSplitter,
     QTableWidget,
     QTableWidgetItem,
@@ -27,7 +30,7 @@ from PySide6.QtWidgets import (
 )
 
 from workbench.illuminants.user_library import resolve_illuminant
-from workbench.scene import LEVELS, level_images, patch_errors
+from workbench.scene import LEVELS, level_images, patch_errors, scene_content
 from workbench.scene.booth import board_patch_world_point, booth_camera, build_booth, relight_booth
 
 __all__ = ["ScenePage"]
@@ -70,15 +73,12 @@ class ScenePage(QWidget):
         self.plotter.disable_anti_aliasing(all_renderers=True)
         self.plotter.setMinimumSize(640, 320)
         self._handles = {}
-        display = workspace.profile.display_model()
-        illuminant = resolve_illuminant(self._source_id)
-        for column, level in enumerate(LEVELS):
-            self.plotter.subplot(0, column)
-            self._images[level] = level_images(illuminant, display, level, k=workspace.profile.k)
-            self._handles[level] = build_booth(self.plotter, self._images[level])
-            self.plotter.add_text(f"Level {level}", position="upper_left", font_size=11,
-                                  color="white")
-        self.plotter.link_views()
+        # The booth's surfaces (plate generation: ~0.7 s) are prepared in a
+        # plain thread (numpy only, no VTK, no Qt) while the window starts;
+        # the meshes are built in the GUI thread when the page is first shown.
+        self._content_thread = threading.Thread(target=scene_content, name="scene-content",
+                                                daemon=True)
+        self._content_thread.start()
 
         self.table = QTableWidget(len(_ROWS), 24)
         self.table.setVerticalHeaderLabels(_ROWS)
@@ -110,6 +110,7 @@ class ScenePage(QWidget):
         bottom_layout.addWidget(table_title)
         bottom_layout.addWidget(self.table, 1)
         bottom_layout.addWidget(self.summary)
+        bottom.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Maximum)
         splitter = QSplitter(Qt.Orientation.Vertical)
         splitter.addWidget(self.plotter)
         splitter.addWidget(bottom)
@@ -122,13 +123,36 @@ class ScenePage(QWidget):
         layout.addWidget(splitter, 1)
 
         self._refill_sources()
-        self._update_errors()
         self._update_caption()
         self.source_box.currentIndexChanged.connect(self._on_box)
         self._unsubscribe = [
             workspace.subscribe("sources-changed", lambda ws: self._refill_sources()),
-            workspace.subscribe("profile-changed", lambda ws: self._relight()),
+            workspace.subscribe("profile-changed", lambda ws: self._relight_if_built()),
         ]
+
+    def _ensure_built(self) -> None:
+        """Build both booths (once), lit by the current source and profile."""
+        if self._handles:
+            return
+        self._content_thread.join()
+        profile = self.workspace.profile
+        display = profile.display_model()
+        illuminant = resolve_illuminant(self._source_id)
+        for column, level in enumerate(LEVELS):
+            self.plotter.subplot(0, column)
+            self._images[level] = level_images(illuminant, display, level, k=profile.k)
+            self._handles[level] = build_booth(self.plotter, self._images[level])
+            self.plotter.add_text(f"Level {level}", position="upper_left", font_size=11,
+                                  color="white")
+        self.plotter.link_views()
+        self._fit_cameras()
+        self._update_errors(illuminant)
+
+    def _relight_if_built(self) -> None:
+        if self._handles:
+            self._relight()
+        else:
+            self._update_caption()
 
     # -- public ---------------------------------------------------------------
     @property
@@ -147,10 +171,17 @@ class ScenePage(QWidget):
         self.source_box.blockSignals(True)
         self.source_box.setCurrentIndex(self.source_box.findData(source_id))
         self.source_box.blockSignals(False)
-        self._relight()
+        if self._handles:
+            self._relight()
+        else:
+            self._ensure_built()
+            self.plotter.ren_win.Render()
+            self._update_caption()
+            self.source_changed.emit(self._source_id)
 
     def level_images(self, level: int):
         """The :class:`workbench.scene.LevelImages` the view at ``level`` shows now."""
+        self._ensure_built()
         return self._images[level]
 
     def rendered_image(self) -> np.ndarray:
@@ -158,6 +189,7 @@ class ScenePage(QWidget):
         from vtkmodules.util.numpy_support import vtk_to_numpy
         from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
+        self._ensure_built()
         window = self.plotter.ren_win
         window.Render()
         grab = vtkWindowToImageFilter()
@@ -172,6 +204,7 @@ class ScenePage(QWidget):
 
     def patch_screen_point(self, level: int, index: int) -> tuple[int, int]:
         """(column, row) in :meth:`rendered_image` of ColorChecker patch ``index``'s centre at ``level``."""
+        self._ensure_built()
         renderer = self.plotter.renderers[LEVELS.index(level)]
         renderer.SetWorldPoint(*board_patch_world_point(self._handles[level], index), 1.0)
         renderer.WorldToDisplay()
@@ -181,6 +214,7 @@ class ScenePage(QWidget):
 
     def save_screenshot(self, path) -> None:
         """Write the whole page as PNG, the 3D views from VTK's own read-back."""
+        self._ensure_built()
         self.plotter.ren_win.Render()
         pixmap = self.grab()
         render = np.ascontiguousarray(self.rendered_image())
@@ -270,6 +304,7 @@ class ScenePage(QWidget):
 
     def error_summary(self):
         """The current :class:`workbench.scene.SourceErrors`."""
+        self._ensure_built()
         return self._errors
 
     def _fit_cameras(self) -> None:
@@ -285,6 +320,7 @@ class ScenePage(QWidget):
 
     def showEvent(self, event):  # noqa: N802 - Qt's name
         super().showEvent(event)
+        self._ensure_built()
         self._fit_cameras()
 
     def closeEvent(self, event):  # noqa: N802 - Qt's name
@@ -298,5 +334,6 @@ class ScenePage(QWidget):
             except ValueError:
                 pass
         self._unsubscribe = []
+        self._content_thread.join(timeout=30)
         if not getattr(self.plotter, "_closed", True):
             self.plotter.close()
