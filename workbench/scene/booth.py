@@ -188,7 +188,7 @@ def booth_camera(plotter: pv.Plotter, aspect: float | None = None) -> None:
     half = np.tan(np.radians(view_angle / 2))
     distance = depth * 1.75
     if aspect:  # far enough back that the opening's width fits too
-        distance = max(distance, depth / 2 + 1.02 * (width / 2) / (half * aspect))
+        distance = max(distance, depth / 2 + 0.9 * (width / 2) / (half * aspect))
     plotter.camera_position = [(0.0, height * 0.5, distance),
                                (0.0, height * 0.45, -depth / 2), (0.0, 1.0, 0.0)]
     plotter.camera.view_angle = view_angle

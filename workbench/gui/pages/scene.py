@@ -22,7 +22,6 @@ from PySide6.QtWidgets import (
     QHeaderView,
     QLabel,
     QSizePolicy,
-    QSplitter,
     QTableWidget,
     QTableWidgetItem,
     QVBoxLayout,
@@ -38,6 +37,9 @@ __all__ = ["ScenePage"]
 _ROWS = ("Level 2 shows", "Level 1 ΔE00", "Level 2 ΔE00", "L1 |ΔR ΔG ΔB|", "L2 |ΔR ΔG ΔB|",
          "DAC_t (R G B)")
 """Rows of the error table; its columns are the 24 patches."""
+
+_VIEW_TITLES = {1: "Level 1: authored textures, light colour set",
+                2: "Level 2: textures re-authored for the source"}
 
 
 def _triplet(values) -> str:
@@ -111,16 +113,11 @@ class ScenePage(QWidget):
         bottom_layout.addWidget(self.table, 1)
         bottom_layout.addWidget(self.summary)
         bottom.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Maximum)
-        splitter = QSplitter(Qt.Orientation.Vertical)
-        splitter.addWidget(self.plotter)
-        splitter.addWidget(bottom)
-        splitter.setStretchFactor(0, 1)
-        splitter.setStretchFactor(1, 0)
-        splitter.setCollapsible(0, False)
-        self.splitter = splitter
+        self._bottom = bottom
         layout = QVBoxLayout(self)
         layout.addLayout(top)
-        layout.addWidget(splitter, 1)
+        layout.addWidget(self.plotter, 1)  # the views take every pixel the table does not need
+        layout.addWidget(bottom, 0)
 
         self._refill_sources()
         self._update_caption()
@@ -142,7 +139,7 @@ class ScenePage(QWidget):
             self.plotter.subplot(0, column)
             self._images[level] = level_images(illuminant, display, level, k=profile.k)
             self._handles[level] = build_booth(self.plotter, self._images[level])
-            self.plotter.add_text(f"Level {level}", position="upper_left", font_size=11,
+            self.plotter.add_text(_VIEW_TITLES[level], position="upper_left", font_size=10,
                                   color="white")
         self.plotter.link_views()
         self._fit_cameras()
