@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import sys
 from pathlib import Path
 
@@ -56,11 +57,27 @@ def run_gui(path: str | None = None, *, simulate: bool = False, screenshot_dir: 
         written = save_screenshots(window, Path(screenshot_dir), path=path, time_scale=time_scale)
         for file in written:
             print(f"wrote {file}")
-        window.close()
+        _dispose(app, window)
         return 0
     if time_scale is not None:
         window.pages["calibrate"].form.time_scale.setValue(time_scale)
     window.show()
     if path:
         window.open_path(path)
-    return app.exec()
+    status = app.exec()
+    _dispose(app, window)
+    return status
+
+
+def _dispose(app: QApplication, window) -> None:
+    """Close and delete the window, then collect, while Qt is still alive.
+
+    Left to the interpreter's finalization, the order in which PySide6's
+    wrappers are collected can abort the process ("none_dealloc") after the
+    work is done.
+    """
+    window.close()
+    window.deleteLater()
+    app.processEvents()
+    del window
+    gc.collect()

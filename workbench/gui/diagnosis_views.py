@@ -40,6 +40,8 @@ __all__ = [
     "histogram_view",
     "finding_cards",
     "summary_lines",
+    "detail_lines",
+    "VERDICT_KEYS",
     "FINDING_PLOTS",
 ]
 
@@ -49,23 +51,25 @@ _GRID = np.linspace(0.0, 1.0, 256)
 
 @dataclass(frozen=True)
 class Series:
-    """One curve or set of points: ``x``, ``y``, a name and a colour index (0–2 channels, 3 grey)."""
+    """One curve, set of points or bars: ``x``, ``y``, a name and a colour index (0–2 channels, 3 grey)."""
 
     name: str
     x: np.ndarray
     y: np.ndarray
     colour: int = 3
     points: bool = True
+    bars: bool = False
 
 
 @dataclass(frozen=True)
 class PlotView:
-    """A titled plot: axis labels with units and its series."""
+    """A titled plot: axis labels with units, its series, and named x ticks if the x axis is categorical."""
 
     title: str
     x_label: str
     y_label: str
     series: tuple = ()
+    x_ticks: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -117,8 +121,10 @@ def additivity_view(diagnosis) -> PlotView:
     """White vs R + G + B (black subtracted), per tristimulus value, in %."""
     context = diagnosis.context
     ratio = 100 * (context.white - context.black) / sum(s.full_XYZ for s in context.sweeps)
-    return PlotView("additivity: white / (R + G + B)", "tristimulus value (0 X, 1 Y, 2 Z)", "white / (R+G+B), %",
-                    (Series("measured", np.arange(3.0), ratio, 3),))
+    return PlotView("white / (R + G + B)", "tristimulus value", "white / (R + G + B), %",
+                    (Series("measured", np.arange(3.0), ratio, 3, bars=True),
+                     Series("additive (100 %)", np.array([-0.5, 2.5]), np.array([100.0, 100.0]), 3, points=False)),
+                    x_ticks=((0, "X"), (1, "Y"), (2, "Z")))
 
 
 def grey_additivity_view(diagnosis) -> PlotView | None:
@@ -135,7 +141,7 @@ def grey_additivity_view(diagnosis) -> PlotView | None:
     usable = np.isfinite(summed) & (summed > 0.02 * sum(s.full_XYZ[1] for s in context.sweeps))
     if not usable.any():
         return None
-    return PlotView("greys vs the sum of their channels", "DAC", "grey Y / (R+G+B) Y, %",
+    return PlotView("greys / sum of channels", "DAC", "grey Y / (R+G+B) Y, %",
                     (Series("greys", level[usable], 100 * measured[usable] / summed[usable], 3),))
 
 
@@ -154,7 +160,7 @@ def white_reference_view(diagnosis) -> PlotView | None:
     drift = diagnosis.context.drift
     if drift is None:
         return None
-    return PlotView("white references over time", "session time, min", "white Y, % of final",
+    return PlotView("white references", "session time, min", "white Y, % of final",
                     (Series("white", drift.times / 60, 100 * drift.gains, 3),))
 
 
@@ -272,14 +278,40 @@ def finding_cards(diagnosis) -> tuple:
     return tuple(cards)
 
 
+VERDICT_KEYS = ("session", "baseline", "extended", "gain")
+"""Top-level entries of ``to_json()`` that make the one-glance verdict; the others are details."""
+
+
+def _scores(block: dict) -> str:
+    validation = block.get("validation") or {}
+    figures = ", ".join(f"{k.replace('_dE00', '')} {v:.2f}" for k, v in validation.items()
+                        if k.endswith("_dE00") and isinstance(v, float))
+    return f"{block.get('model', '')}: ΔE00 {figures}" if figures else str(block.get("model", ""))
+
+
 def summary_lines(diagnosis) -> tuple:
-    """The verdict as lines of text: every top-level entry of ``to_json()`` but the findings."""
+    """The verdict (session, baseline, extended, gain) as ``(name, text)`` lines."""
     document = diagnosis.to_json()
+    session = document.get("session", {})
+    gain = (document.get("gain") or {}).get("mean_dE00_reduction_pct")
+    lines = [("session", f"{session.get('source', '')}: {session.get('measurements', '?')} measurements, "
+                         f"{session.get('validation', '?')} held out"),
+             ("baseline", _scores(document.get("baseline") or {})),
+             ("extended", _scores(document.get("extended") or {}))]
+    if gain is not None:
+        lines.append(("gain", f"mean ΔE00 reduced by {gain:.0f} % on held-out colours"))
+    return tuple(lines)
+
+
+def detail_lines(diagnosis) -> tuple:
+    """Every other top-level entry of ``to_json()`` (findings aside) as ``(name, text)``; a list of
+    records gives one line per record."""
     lines = []
-    for key, value in document.items():
-        if key == "findings" or value is None:
+    for key, value in diagnosis.to_json().items():
+        if key in VERDICT_KEYS or key == "findings" or value is None:
             continue
-        if isinstance(value, dict):
-            value = {k: v for k, v in value.items() if k not in ("terms",)}
-        lines.append((key, _text(value)))
+        if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            lines += [(key, _text(v)) for v in value]
+        else:
+            lines.append((key, _text(value)))
     return tuple(lines)

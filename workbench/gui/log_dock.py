@@ -58,6 +58,12 @@ class LogDock(QDockWidget):
         self.handler.setLevel(logging.INFO)
         self.traffic.toggled.connect(self.set_traffic)
         self._levels = {name: logging.getLogger(name).level for name in _LOGGERS}
+        # Handlers already on the root (the CLI's stderr handler) keep showing only what they showed
+        # before, although the workbench loggers now pass INFO on to the dock.
+        root = logging.getLogger()
+        self._quietened = [h for h in root.handlers if h.level == logging.NOTSET]
+        for handler in self._quietened:
+            handler.setLevel(root.level)
         for name in _LOGGERS:
             logger = logging.getLogger(name)
             logger.addHandler(self.handler)
@@ -75,3 +81,5 @@ class LogDock(QDockWidget):
         for name, level in self._levels.items():
             logging.getLogger(name).removeHandler(self.handler)
             logging.getLogger(name).setLevel(level)
+        for handler in self._quietened:
+            handler.setLevel(logging.NOTSET)

@@ -125,7 +125,7 @@ class MainWindow(QMainWindow):
                 arrow.setStyleSheet("color:#888;font-size:14px")
                 flow_bar.addWidget(arrow)
             button = QToolButton()
-            button.setText(f"{i + 1}  {title}")
+            button.setText(f"{i + 1}  {title.replace('&', '&&')}")
             button.setCheckable(True)
             button.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextOnly)
             button.setStyleSheet("QToolButton{padding:5px 12px;font-size:13px}"

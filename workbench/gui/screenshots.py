@@ -86,6 +86,9 @@ def save_screenshots(window, directory: Path, *, path=None, time_scale: float | 
             for _ in range(5):
                 QApplication.processEvents()
             page = window.pages[key]
+            if key == "export" and callable(getattr(page, "export", None)):
+                page.export()  # into the temporary session directory: the page shows what it wrote
+                QApplication.processEvents()
             file = directory / f"{key}.png"
             if callable(getattr(page, "save_screenshot", None)):
                 page.save_screenshot(file)

@@ -10,12 +10,13 @@ and the ΔE00 histograms. "Open report" writes the HTML report and opens it.
 
 from __future__ import annotations
 
+import html
 import tempfile
 from pathlib import Path
 
 from PySide6.QtCore import QUrl, Qt
 from PySide6.QtGui import QDesktopServices
-from PySide6.QtWidgets import QHBoxLayout, QLabel, QPushButton, QSplitter, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QPushButton, QSplitter, QTextBrowser, QVBoxLayout, QWidget
 
 from workbench.gui import diagnosis_views as views
 from workbench.gui.widgets.finding_cards import FindingCards
@@ -36,6 +37,9 @@ class DiagnosePage(QWidget):
         self.summary = QLabel("")
         self.summary.setWordWrap(True)
         self.summary.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.details = QTextBrowser()
+        self.details.setMaximumHeight(110)
+        self.details.setToolTip("everything else the diagnosis returned")
         self.report_button = QPushButton("Open report")
         self.report_button.setToolTip("write the HTML report of this diagnosis and open it in the browser")
         self.report_button.clicked.connect(self.open_report)
@@ -46,7 +50,8 @@ class DiagnosePage(QWidget):
         self.histogram = ValidationHistogram()
 
         header = QHBoxLayout()
-        header.addWidget(self.summary, 1)
+        header.addWidget(self.summary, 2)
+        header.addWidget(self.details, 3)
         header.addWidget(self.report_button, 0, Qt.AlignmentFlag.AlignTop)
         right = QSplitter(Qt.Orientation.Vertical)
         right.addWidget(self.table)
@@ -69,8 +74,11 @@ class DiagnosePage(QWidget):
         if diagnosis is None:
             self.summary.setText("<i>No diagnosis yet: run a calibration, or open a session CSV, .ti3, .mat, "
                                  "measurement directory or profile (File ▸ Open).</i>")
+            self.details.setHtml("")
         else:
             self.summary.setText("<br>".join(f"<b>{key}</b>: {text}" for key, text in views.summary_lines(diagnosis)))
+            self.details.setHtml("<br>".join(f"<b>{key}</b>: {html.escape(text)}"
+                                             for key, text in views.detail_lines(diagnosis)))
         self.cards.show_diagnosis(diagnosis)
         self.fits.show_diagnosis(diagnosis)
         self.table.show_diagnosis(diagnosis)

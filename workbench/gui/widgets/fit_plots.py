@@ -44,7 +44,9 @@ class FitPlots(QWidget):
             self.fits[c].show_view(sweep.fit)
             self.residuals[c].show_view(sweep.residuals)
         self.additivity.show_view(views.additivity_view(diagnosis))
-        self.greys.show_view(views.grey_additivity_view(diagnosis), "no greys measured")
+        greys = views.grey_additivity_view(diagnosis)
+        self.greys.setVisible(greys is not None)
+        self.greys.show_view(greys, "no greys measured")
         self.chromaticity.show_view(views.chromaticity_view(diagnosis))
         self.whites.show_view(views.white_reference_view(diagnosis),
                               "white references need times\n(fewer than 3, or none in this file)")

@@ -43,4 +43,7 @@ class SplitSwatch(QWidget):
             painter.setPen(text)
             painter.drawText(rect.adjusted(6, 4, -6, -4), Qt.AlignmentFlag.AlignBottom | Qt.AlignmentFlag.AlignLeft,
                              caption)
+        painter.setPen(QColor("#777"))
+        painter.drawLine(half, 0, half, self.height())
+        painter.drawRect(self.rect().adjusted(0, 0, -1, -1))
         painter.end()

@@ -47,7 +47,9 @@ def configure_plot(plot: pg.PlotItem, title: str, x_label: str, y_label: str) ->
     plot.setLabel("left", y_label)
     plot.showGrid(x=True, y=True, alpha=0.25)
     for side in ("bottom", "left"):
-        plot.getAxis(side).label.setFont(pg.QtGui.QFont("", 9))
+        axis = plot.getAxis(side)
+        axis.enableAutoSIPrefix(False)  # the label's unit stays what it says
+        axis.label.setFont(pg.QtGui.QFont("", 9))
 
 
 class ViewPlot(pg.PlotWidget):
@@ -57,7 +59,9 @@ class ViewPlot(pg.PlotWidget):
         super().__init__(parent, background="w")
         self.setMinimumSize(220, 170)
         self._curves: list = []
-        self._legend = self.getPlotItem().addLegend(offset=(5, 5), labelTextSize="8pt") if legend else None
+        self._bars: list = []
+        self._legend = self.getPlotItem().addLegend(
+            offset=(5, 5), labelTextSize="8pt", brush=pg.mkBrush(255, 255, 255, 210))  if legend else None
         self._empty = pg.TextItem("", color="#777", anchor=(0.5, 0.5))
         self.getPlotItem().addItem(self._empty, ignoreBounds=True)
 
@@ -67,12 +71,21 @@ class ViewPlot(pg.PlotWidget):
             self._curves.append(curve)
         return self._curves[i]
 
+    def _bar(self, i: int):
+        while len(self._bars) <= i:
+            bar = pg.BarGraphItem(x=[], height=[], width=0.6)
+            self.getPlotItem().addItem(bar)
+            self._bars.append(bar)
+        return self._bars[i]
+
     def show_view(self, view, empty_text: str = "no data") -> None:
         """Draw ``view`` (or clear the plot and say ``empty_text`` when it is None)."""
         plot = self.getPlotItem()
         if view is None:
             for curve in self._curves:
                 curve.setData([], [])
+            for bar in self._bars:
+                bar.setOpts(x=[], height=[])
             self._empty.setText(empty_text)
             self._empty.setPos(0.5, 0.5)
             plot.setXRange(0, 1)
@@ -84,9 +97,17 @@ class ViewPlot(pg.PlotWidget):
         configure_plot(plot, view.title, view.x_label, view.y_label)
         if self._legend is not None:
             self._legend.clear()
+        bars = 0
         for i, series in enumerate(view.series):
             curve = self._curve(i)
             x, y = np.asarray(series.x, float), np.asarray(series.y, float)
+            if series.bars:
+                bottom = min(0.0, float(y.min())) if len(y) and float(y.min()) < 50 else 0.9 * float(y.min())
+                self._bar(bars).setOpts(x=x, height=y - bottom, y0=bottom, width=0.6, brush=brush(series.colour, 170),
+                                        pen=pen(series.colour, 1))
+                bars += 1
+                curve.setData([], [])
+                continue
             if series.points:
                 curve.setData(x, y, pen=None, symbol="o", symbolSize=5, symbolPen=pen(series.colour, 1),
                               symbolBrush=brush(series.colour, 110))
@@ -96,4 +117,7 @@ class ViewPlot(pg.PlotWidget):
                 self._legend.addItem(curve, series.name)
         for curve in self._curves[len(view.series):]:
             curve.setData([], [])
+        for bar in self._bars[bars:]:
+            bar.setOpts(x=[], height=[])
+        plot.getAxis("bottom").setTicks([list(view.x_ticks)] if view.x_ticks else None)
         plot.enableAutoRange()

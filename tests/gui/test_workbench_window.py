@@ -1,0 +1,227 @@
+"""The workbench window, clicked through as a user would: calibrate (simulated), pause, cancel and resume,
+an instrument error and its re-measurement, re-measuring a finished patch, opening a real .ti3, exporting."""
+
+import logging
+import os
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("PySide6")
+pytest.importorskip("pyqtgraph")
+from workbench.gui import measure_window  # noqa: E402
+
+_UNAVAILABLE = measure_window.patch_window_unavailable_reason()
+if _UNAVAILABLE is not None:
+    pytest.skip(f"Qt cannot open a window here: {_UNAVAILABLE}", allow_module_level=True)
+
+from PySide6.QtCore import Qt  # noqa: E402
+
+from instruments.cs2000.emulator import ErrorFault  # noqa: E402
+from workbench.gui.calibration_setup import open_run  # noqa: E402
+from workbench.gui.main_window import PAGES, MainWindow, UnavailablePage, _make_page  # noqa: E402
+from workbench.gui.settings import WindowSettings  # noqa: E402
+from workbench.measurement.journal import read_journal  # noqa: E402
+from workbench.measurement.runner import JOURNAL_NAME, PatchMeasured, RunPaused  # noqa: E402
+from workbench.profile import load_profile  # noqa: E402
+from workbench.workspace import Workspace  # noqa: E402
+
+pytestmark = pytest.mark.gui
+
+REAL = Path(os.environ.get("VR_WORKBENCH_SHARED", Path(__file__).resolve().parents[3] / "shared")) / "data" / "real"
+RUN_TIMEOUT_MS = 60_000
+QUICK = 28
+
+
+@pytest.fixture(autouse=True)
+def _config_in_tmp(tmp_path, monkeypatch):
+    monkeypatch.setenv("VR_WORKBENCH_CONFIG_DIR", str(tmp_path / "config"))
+
+
+@pytest.fixture
+def window(qtbot, tmp_path):
+    window = MainWindow(Workspace(), WindowSettings(tmp_path / "config"))
+    qtbot.addWidget(window)
+    window.show()
+    yield window
+    window.shutdown()
+
+
+def _configure(window, out_dir, *, time_scale=0.0, seed=11, plan="quick"):
+    """Fill in the form as a user does: simulated CS-2000 and headset, a plan, an output directory."""
+    form = window.pages["calibrate"].form
+    form.instrument.setCurrentIndex(form.instrument.findData("simulated"))
+    form.display.setCurrentIndex(form.display.findData("simulated"))
+    form.plan.setCurrentIndex(form.plan.findData(plan))
+    form.seed.setValue(seed)
+    form.time_scale.setValue(time_scale)
+    check, magnitude = form.effects["channel-interaction"]
+    check.setChecked(True)
+    magnitude.setValue(0.1)
+    form.out_dir.setText(str(out_dir))
+    return window.pages["calibrate"]
+
+
+def _click(qtbot, button):
+    assert button.isEnabled(), f"{button.text()!r} is disabled"
+    qtbot.mouseClick(button, Qt.MouseButton.LeftButton)
+
+
+def test_a_full_simulated_calibration_fills_the_plots_shows_the_diagnosis_and_exports_a_valid_profile(
+        qtbot, window, tmp_path):
+    calibrate = _configure(window, tmp_path / "run")
+    assert "28 patches" in calibrate.form.estimate.text() and "instrument time" in calibrate.form.estimate.text()
+    with qtbot.waitSignal(calibrate.session_loaded, timeout=RUN_TIMEOUT_MS):
+        _click(qtbot, calibrate.start_button)
+    assert calibrate.plots.point_counts() == {"ramp-r": 5, "ramp-g": 5, "ramp-b": 5, "white": 2}
+    assert calibrate.progress.value() == QUICK
+    assert all(calibrate.patches.status(i) == "ok" for i in range(QUICK))
+    assert window.current_page_key() == "diagnose"
+    assert "— run —" in window.windowTitle()  # the measurement directory names the session
+
+    diagnose = window.pages["diagnose"]
+    assert window.workspace.diagnosis is not None
+    assert diagnose.table.rowCount() == 10
+    worst_first = diagnose.table.values(2)
+    assert worst_first == sorted(worst_first, reverse=True)
+    assert [card.card.effect for card in diagnose.cards.cards][:1] == ["channel-interaction"]
+    assert "baseline" in diagnose.summary.text() and "extended" in diagnose.summary.text()
+    assert diagnose.fits.fits[0].getPlotItem().listDataItems()[0].xData is not None
+    report = diagnose.write_report(tmp_path / "report.html")
+    assert "Display diagnosis" in report.read_text()
+
+    window.show_page("export")
+    export = window.pages["export"]
+    export.path.setText(str(tmp_path / "headset.vrprofile.json"))
+    with qtbot.waitSignal(export.exported, timeout=5000):
+        _click(qtbot, export.export_button)
+    profile = load_profile(tmp_path / "headset.vrprofile.json")  # validates against the schema
+    assert profile.display_model_type == window.workspace.diagnosis.extended.model_id
+    assert "wrote" in export.status.text() and '"display_model"' in export.written.toPlainText()
+    assert window.workspace.profile_path == tmp_path / "headset.vrprofile.json"
+    assert "headset.vrprofile.json" in window.windowTitle()
+
+
+def test_pause_holds_the_run_and_resume_finishes_it(qtbot, window, tmp_path):
+    calibrate = _configure(window, tmp_path / "run", time_scale=0.004)
+    _click(qtbot, calibrate.start_button)
+    qtbot.waitUntil(lambda: window.workspace.measurement.done >= 1, timeout=RUN_TIMEOUT_MS)
+    with qtbot.waitSignal(calibrate.worker.event, timeout=RUN_TIMEOUT_MS,
+                          check_params_cb=lambda e: isinstance(e, RunPaused)):
+        _click(qtbot, calibrate.pause_button)
+    assert window.workspace.measurement.status == "paused"
+    done = window.workspace.measurement.done
+    assert done < QUICK
+    qtbot.wait(400)
+    assert window.workspace.measurement.done == done  # nothing is measured while paused
+    assert calibrate.pause_button.text() == "Resume"
+    with qtbot.waitSignal(calibrate.session_loaded, timeout=RUN_TIMEOUT_MS):
+        _click(qtbot, calibrate.pause_button)
+    assert window.workspace.measurement.status == "finished" and window.workspace.measurement.done == QUICK
+
+
+def test_cancel_then_resume_continues_the_journal(qtbot, window, tmp_path):
+    calibrate = _configure(window, tmp_path / "run", time_scale=0.004)
+    _click(qtbot, calibrate.start_button)
+    qtbot.waitUntil(lambda: window.workspace.measurement.done >= 3, timeout=RUN_TIMEOUT_MS)
+    with qtbot.waitSignal(calibrate.run_finished, timeout=RUN_TIMEOUT_MS) as finished:
+        _click(qtbot, calibrate.cancel_button)
+    assert finished.args[0].status == "cancelled" and finished.args[0].measured < QUICK
+    qtbot.waitUntil(lambda: not calibrate.running, timeout=10_000)
+    assert calibrate.start_button.text() == "Resume"
+    calibrate.form.time_scale.setValue(0.0)
+    with qtbot.waitSignal(calibrate.session_loaded, timeout=RUN_TIMEOUT_MS):
+        _click(qtbot, calibrate.start_button)
+    journal = read_journal(tmp_path / "run" / JOURNAL_NAME)
+    assert len(journal.resumes) == 1 and len(journal.ok_records()) == QUICK
+    assert calibrate.start_button.text() == "Start"
+
+
+def test_an_instrument_error_is_shown_and_the_patch_re_measured(qtbot, window, tmp_path):
+    calibrate = _configure(window, tmp_path / "run")
+    setup = calibrate.form.setup(faults=(ErrorFault("ER83", command="MEAS,1", nth=3, line=2),))
+    with qtbot.waitSignal(calibrate.run_finished, timeout=RUN_TIMEOUT_MS):
+        calibrate.start(setup)  # the emulator is told to fail the third measurement
+    assert calibrate.patches.status(2) == "FAILED"
+    assert "ER83" in calibrate.patches.note(2) and "knob" in calibrate.patches.note(2)
+    assert "1 failed" in calibrate.patches.failures.text()
+    assert "patch #2 failed" in calibrate.message.text()
+    qtbot.waitUntil(lambda: not calibrate.running, timeout=10_000)
+    with qtbot.waitSignal(calibrate.session_loaded, timeout=RUN_TIMEOUT_MS):
+        _click(qtbot, calibrate.patches.remeasure_failed)
+    assert calibrate.patches.status(2) == "ok"
+    assert "supersedes the earlier failed record" in calibrate.patches.note(2)
+    assert calibrate.patches.failed_indices() == []
+
+
+def test_re_measuring_a_finished_patch_keeps_both_records_and_the_newer_wins(qtbot, window, tmp_path):
+    calibrate = _configure(window, tmp_path / "run")
+    with qtbot.waitSignal(calibrate.session_loaded, timeout=RUN_TIMEOUT_MS):
+        _click(qtbot, calibrate.start_button)
+    calibrate.patches.select([5])
+    assert calibrate.patches.selected_indices() == [5]
+    with qtbot.waitSignal(calibrate.session_loaded, timeout=RUN_TIMEOUT_MS):
+        _click(qtbot, calibrate.patches.remeasure_selected)
+    journal = read_journal(tmp_path / "run" / JOURNAL_NAME)
+    older, newer = [r for r in journal.records if r.index == 5]
+    assert journal.latest()[5] is newer and journal.superseded_records() == [older]
+    assert journal.resumes[-1]["remeasure"] == [5]
+    assert "re-measured; supersedes the earlier ok record" in calibrate.patches.note(5)
+    session_row = window.workspace.session.XYZ[5]
+    assert list(session_row) == pytest.approx(list(newer.XYZ), rel=1e-5)
+
+
+def test_reopening_a_killed_session_offers_to_resume_it(qtbot, window, tmp_path):
+    calibrate = _configure(window, tmp_path / "killed")
+    with open_run(calibrate.form.setup()) as run:  # a run that stops after 6 patches, as if killed
+        for event in run.events():
+            if isinstance(event, PatchMeasured) and event.done == 6:
+                run.cancel()
+    asked = []
+    window.ask_resume = lambda journal: asked.append(journal) or True
+    _configure(window, tmp_path / "elsewhere")
+    with qtbot.waitSignal(calibrate.session_loaded, timeout=RUN_TIMEOUT_MS):
+        window.open_path(tmp_path / "killed")
+    assert len(asked) == 1 and len(asked[0].ok_records()) == 6
+    assert len(read_journal(tmp_path / "killed" / JOURNAL_NAME).ok_records()) == QUICK
+
+
+@pytest.mark.skipif(not REAL.is_dir(), reason=f"the shared real display data is not at {REAL}")
+def test_opening_a_real_ti3_shows_its_diagnosis_and_remembers_it(qtbot, window, tmp_path):
+    path = REAL / "dell-up2516d-displaycal.ti3"
+    with qtbot.waitSignal(window.file_loaded, timeout=RUN_TIMEOUT_MS):
+        window.open_path(path)
+    diagnose = window.pages["diagnose"]
+    assert window.current_page_key() == "diagnose"
+    assert diagnose.table.rowCount() == 108
+    assert "dell-up2516d-displaycal.ti3" in window.windowTitle()
+    effects = {card.card.effect for card in diagnose.cards.cards}
+    assert effects == {f["effect"] for f in window.workspace.diagnosis.to_json()["findings"]}
+    assert window.settings.recent_files() == [str(path.resolve())]
+    assert window.settings.path.is_relative_to(tmp_path)
+    assert [a.text() for a in window.recent_menu.actions()] == [str(path.resolve())]
+
+
+def test_a_file_that_cannot_be_read_is_reported_naming_it(qtbot, window, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("kind,r,g\nwhite,1,2\n")
+    with qtbot.waitSignal(window.error, timeout=RUN_TIMEOUT_MS) as error:
+        window.open_path(bad)
+    assert "bad.csv" in error.args[0]
+
+
+def test_the_flow_has_every_page_in_order_and_a_missing_one_says_why(window):
+    assert [window.stack.widget(i).title for i in range(window.stack.count())] == [p[3] for p in PAGES]
+    page = _make_page("workbench.gui.pages.no_such_page", "NoPage", "Nowhere", window.workspace)
+    assert isinstance(page, UnavailablePage) and page.text().startswith("page not available: ")
+
+
+def test_the_log_dock_shows_instrument_traffic_at_debug_on_demand(qtbot, window):
+    dock = window.log_dock
+    logging.getLogger("instruments.cs2000").debug("-> MEAS,1 (before)")
+    dock.traffic.setChecked(True)
+    logging.getLogger("instruments.cs2000").debug("-> MEAS,1 (after)")
+    qtbot.waitUntil(lambda: "(after)" in dock.text.toPlainText(), timeout=2000)
+    assert "(before)" not in dock.text.toPlainText()
+    dock.traffic.setChecked(False)
+    assert logging.getLogger("instruments.cs2000").getEffectiveLevel() > logging.DEBUG
