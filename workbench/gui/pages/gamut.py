@@ -313,11 +313,15 @@ class GamutPage(QWidget):
         if path:
             self.add_profile_overlay(path)
 
-    def closeEvent(self, event):  # noqa: N802 - Qt's name
+    def shutdown(self) -> None:
+        """Stop listening to the workspace (idempotent; the main window calls it at teardown)."""
         for unsubscribe in self._unsubscribe:
             try:
                 unsubscribe()
             except ValueError:
                 pass
         self._unsubscribe = []
+
+    def closeEvent(self, event):  # noqa: N802 - Qt's name
+        self.shutdown()
         super().closeEvent(event)

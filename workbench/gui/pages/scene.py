@@ -129,7 +129,7 @@ class ScenePage(QWidget):
 
     def _ensure_built(self) -> None:
         """Build both booths (once), lit by the current source and profile."""
-        if self._handles:
+        if self._handles or getattr(self, "_shut", False):
             return
         self._content_thread.join()
         profile = self.workspace.profile
@@ -242,6 +242,8 @@ class ScenePage(QWidget):
             self.select_source(source_id)
 
     def _relight(self) -> None:
+        if getattr(self, "_shut", False):
+            return
         profile = self.workspace.profile
         display = profile.display_model()
         illuminant = resolve_illuminant(self._source_id)
@@ -321,16 +323,23 @@ class ScenePage(QWidget):
         self._fit_cameras()
 
     def closeEvent(self, event):  # noqa: N802 - Qt's name
-        self._teardown()
+        self.shutdown()
         super().closeEvent(event)
 
-    def _teardown(self) -> None:
+    def shutdown(self) -> None:
+        """Unsubscribe and close the interactor (``plotter.close()``); idempotent.
+
+        The main window calls it at teardown: a page inside a stacked widget
+        gets no ``closeEvent`` of its own, and an interactor left open crashes
+        the process at exit.
+        """
         for unsubscribe in getattr(self, "_unsubscribe", []):
             try:
                 unsubscribe()
             except ValueError:
                 pass
         self._unsubscribe = []
+        self._shut = True
         self._content_thread.join(timeout=30)
         if not getattr(self.plotter, "_closed", True):
             self.plotter.close()
