@@ -135,3 +135,21 @@ def test_read_session_still_reads_a_psychtoolbox_mat_and_other_formats():
         pytest.skip(f"the shared real display data is not at {real}")
     assert read_session(real / "sony-og-ptb-cal.mat").metadata["format"] == "psychtoolbox"
     assert read_session(real / "dell-up2516d-displaycal.ti3").window is None
+
+
+def test_diagnose_apl_in_one_call():
+    import json
+
+    from workbench.apl import diagnose_apl, full_field_rows
+
+    session = generate_session(0.3, 5)
+    result = diagnose_apl(session, 0.002)
+    assert result.test.z > 5 and result.curve is not None
+    assert {h.by for h in result.holdouts} == {"window size", "surround level"}
+    note = result.closing_note()
+    assert note.startswith("apl-dependence: ") and "leave one window size out" in note
+    json.dumps(result.to_json())
+    assert full_field_rows(session).sum() == np.sum(session.window == 1)
+    clean = diagnose_apl(_full_field_session(), 0.002)
+    assert clean.curve is None and clean.holdouts == () and "not testable" in clean.closing_note()
+    json.dumps(clean.to_json())

@@ -21,7 +21,7 @@ def test_hidden_apl_limiting_is_found(seed):
     assert test.testable
     assert test.z > Z_FOUND, test.evidence
     assert test.impact_dE00 > 1.0
-    assert "dimmer per unit of load" in test.evidence
+    assert "per unit of the frame's load" in test.evidence
 
 
 @pytest.mark.parametrize("seed", SEEDS)

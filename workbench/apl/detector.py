@@ -6,8 +6,9 @@ log luminance is regressed on the frame's load within each patch (one
 intercept per patch, one common slope ``β``). With a relative measurement
 noise ``σ`` (standard deviation of ``ΔY/Y`` for one measurement), the slope's
 standard error is ``σ / sqrt(Σ (L − L̄_patch)²)``. The statistic is ``−β``: the
-fractional loss of output per unit of load (from black to a full-field
-white), ``z = −β / SE``; an OLED's power limiting makes it positive.
+loss of ln luminance per unit of load (from black to a full-field white;
+about the fractional loss when small), ``z = −β / SE``; an OLED's power
+limiting makes it positive.
 
 The statistic is a linear summary of what is usually a knee-shaped curve
 (:mod:`workbench.apl.curve`): it tests whether there is a dependence, the
@@ -39,8 +40,8 @@ class AplDependenceTest:
     Attributes
     ----------
     statistic : float
-        Fractional output loss per unit of load (0.2: a patch is 20 % dimmer
-        in a full white field than alone on black); 0 when not testable.
+        Loss of ln luminance per unit of load (0.2: a patch is about 20 %
+        dimmer in a full white field than alone on black); 0 when not testable.
     standard_error : float
         Its standard error from the given relative noise (``inf`` when not testable).
     z : float
@@ -115,10 +116,12 @@ def detect_apl_dependence(session: Session, relative_noise: float) -> AplDepende
     impact, low_high = _impact(data, load)
     patches = len(counts)
     (Y_low, L_low), (Y_high, L_high) = low_high
-    evidence = (f"the same patch is {100 * statistic:.1f} % ± {100 * standard_error:.1f} % dimmer per unit of "
-                f"load (0 = black, 1 = full-field white; z = {z:.1f}) over {len(data)} rows of {patches} "
-                f"patches measured under different frames; the brightest patch gives {Y_low:.4g} cd/m² at "
-                f"load {L_low:.3f} and {Y_high:.4g} cd/m² at load {L_high:.3f}; mean impact {impact:.2f} ΔE00")
+    change = 100.0 * (Y_high / Y_low - 1.0)
+    evidence = (f"the same patch's ln luminance changes by {-statistic:+.3f} ± {standard_error:.3f} per unit of "
+                f"the frame's load (0 = black, 1 = full-field white; z = {z:.1f}) over {len(data)} rows of "
+                f"{patches} patches measured under different frames; the brightest patch gives "
+                f"{Y_low:.4g} cd/m² at load {L_low:.3f} and {Y_high:.4g} cd/m² at load {L_high:.3f} "
+                f"({change:+.1f} %); mean impact {impact:.2f} ΔE00")
     return AplDependenceTest(statistic, standard_error, z, impact, evidence, rows=len(data), patches=patches)
 
 
