@@ -7,20 +7,26 @@ paper's model holds for this effect":
 
 ``temporal-drift``
     χ² of the distinct white references (copies left out) about their mean,
-    ``n − 1`` degrees of freedom; against session time, or against row order
+    ``n − 1`` degrees of freedom, as an F-test against the noise estimate's
+    own degrees of freedom; with six or more references it must also hold
+    without the most deviant interior one (one bad reading is not a drift;
+    the first and last are kept, where a warm-up or a decline shows first); against session time, or against row order
     where the session has no times (a ``.ti3``: its rows are in measurement
     order), and the evidence says which. Statistic: the span of the
     references. The form is named: warm-up, decline, step or wander.
 ``black-offset``
-    z of the mean black luminance against 0 (one-sided). Statistic: black / white in Y.
+    t of the mean black luminance against 0 (one-sided, the noise estimate's
+    degrees of freedom). Statistic: black / white in Y.
 ``channel-interaction``
     χ² (3 dof) of ``W + 2K − (R + G + B)`` in X, Y and Z with its covariance
-    (white, black and full-drive primaries). Statistic: ``1 − (W − K)/Σ(P − K)`` in Y.
+    (white, black and full-drive primaries), as an F-test against the noise
+    estimate's degrees of freedom. Statistic: ``1 − (W − K)/Σ(P − K)`` in Y.
 ``chromaticity-shift``
     per channel, generalized least squares of the black-subtracted sweep's
-    xy against ``(1 − d)`` and ``(1 − d)²`` (the full-drive point included):
-    F-test of the four slopes; the smallest p times 3 channels. Statistic:
-    the fitted xy distance at the lowest usable level.
+    xy against ``(1 − d)`` and ``(1 − d)²`` (the full-drive point included,
+    the subtracted black's own error a nuisance parameter): F-test of the
+    four slopes; the smallest p times 3 channels. Statistic: the fitted xy
+    distance at the lowest usable level.
 ``tone-curve-shape``
     per channel, ``K + k·d^γ`` against ``K + k·f(d)`` with ``f`` GOG or
     extended power (one more parameter each), weighted by the noise model,
@@ -58,7 +64,6 @@ from workbench.diagnostics.evidence import (
 from workbench.diagnostics.noise import NoiseModel, copy_rows, estimate_noise
 from workbench.diagnostics.significance import (
     FAMILY_ALPHA,
-    chi2_sf,
     critical_p,
     f_sf,
     z_of_chi2,
@@ -220,11 +225,22 @@ def detect_temporal_drift_raw(drift: DriftCorrection | None, time_basis: str,
         return _untestable("temporal-drift", time_basis)
     Y = drift.luminances
     sd = noise.sd_Y(Y)
-    weights = 1.0 / sd ** 2
-    mean = float(np.sum(weights * Y) / np.sum(weights))
-    chi2 = float(np.sum(((Y - mean) / sd) ** 2))
+
+    def steady_chi2(keep):
+        weights = 1.0 / sd[keep] ** 2
+        mean = float(np.sum(weights * Y[keep]) / np.sum(weights))
+        return float(np.sum(((Y[keep] - mean) / sd[keep]) ** 2))
+
+    everything = np.ones(Y.size, dtype=bool)
+    chi2 = steady_chi2(everything)
     dof = Y.size - 1
-    p = chi2_sf(chi2, dof)
+    p = f_sf(chi2 / dof, dof, noise.dof)  # the noise is estimated: F, not χ²
+    if Y.size >= 6:  # one bad reading is not a drift: it must show without the worst one too
+        deviation = np.abs(Y - np.median(Y)) / sd
+        deviation[[0, -1]] = -np.inf  # a warm-up or a decline shows first at the ends
+        without = everything.copy()
+        without[int(np.argmax(deviation))] = False
+        p = max(p, f_sf(steady_chi2(without) / (dof - 1), dof - 1, noise.dof))
     relative_sd = float(np.median(sd / Y))
     form = _drift_form(drift, relative_sd)
     unit = "s" if time_basis == "time" else ""
@@ -256,9 +272,9 @@ def detect_black_offset(context: DiagnosisContext) -> DetectorResult:
     sd = float(noise.sd_Y(black_Y)) / np.sqrt(context.black_count)
     ratio = black_Y / white_Y
     z = black_Y / sd
-    from scipy.special import ndtr
+    from scipy.special import stdtr
 
-    p = float(ndtr(-z))
+    p = float(stdtr(noise.dof, -z))  # Student t: the noise is estimated
     xy = xy_of(context.black)
     evidence = (f"black measures {100 * ratio:.2f} % of white (Y {black_Y:.4g} ± {sd:.2g} of "
                 f"{white_Y:.4g}, {context.black_count} distinct black row(s)) at xy "
@@ -285,7 +301,7 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
         covariance = covariance + _mean_covariance(noise, sweep.full_XYZ + context.black,
                                                    sweep.full_count)
     chi2 = float(difference @ np.linalg.solve(covariance, difference))
-    p = chi2_sf(chi2, 3)
+    p = f_sf(chi2 / 3, 3, noise.dof)  # the noise is estimated: F, not χ²
     ratio = white / summed
     statistic = 1.0 - float(ratio[1])
     standard_error = float(np.sqrt(covariance[1, 1]) / summed[1])
@@ -298,16 +314,15 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
                    {"white_over_sum": ratio.tolist(), "chi2": chi2}, z=z_of_chi2(chi2, 3))
 
 
-def _xy_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int, black_cov: np.ndarray,
-                   subtracted: np.ndarray) -> np.ndarray:
-    total = float(np.sum(subtracted))
-    x, y = subtracted[0] / total, subtracted[1] / total
-    jacobian = np.array([[1 - x, -x, -x], [-y, 1 - y, -y]]) / total
-    return jacobian @ (_mean_covariance(noise, XYZ, count) + black_cov) @ jacobian.T
-
-
 def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
-    """(p, distance, its SE, lowest drive, coefficients (2, 2)) of one channel, or None."""
+    """(p, distance, its SE, lowest drive, coefficients (2, 2), z) of one channel, or None.
+
+    Generalized least squares of the points' xy on ``1, u, u²`` (``u = 1 − d``)
+    with each point's xy covariance, plus three nuisance parameters for the
+    error of the subtracted black (one error shared by every point, with its
+    own prior covariance): a black that is a little off moves the xy of dark
+    points along a smooth curve, which must not pass for a shift.
+    """
     usable = sweep.output >= MIN_CHROMATICITY_OUTPUT
     if usable.sum() < 4:
         return None
@@ -316,22 +331,36 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
     xy = xy_of(sweep.XYZ[usable])
     rows, targets = [], []
     for i, index in enumerate(np.flatnonzero(usable)):
-        covariance = _xy_covariance(context.noise, sweep.XYZ[index] + context.black,
-                                    int(sweep.counts[index]), black_cov, sweep.XYZ[index])
+        subtracted = sweep.XYZ[index]
+        total = float(np.sum(subtracted))
+        x, y = subtracted[0] / total, subtracted[1] / total
+        jacobian = np.array([[1 - x, -x, -x], [-y, 1 - y, -y]]) / total
+        covariance = jacobian @ _mean_covariance(context.noise, subtracted + context.black,
+                                                 int(sweep.counts[index])) @ jacobian.T
         whitening = np.linalg.inv(np.linalg.cholesky(covariance))
-        design = np.zeros((2, 6))
+        design = np.zeros((2, 9))
         design[0, :3] = [1.0, u[i], u[i] ** 2]
-        design[1, 3:] = [1.0, u[i], u[i] ** 2]
+        design[1, 3:6] = [1.0, u[i], u[i] ** 2]
+        design[:, 6:] = -jacobian  # xy moves by −J·δK when the black is off by δK
         rows.append(whitening @ design)
         targets.append(whitening @ xy[i])
+    if context.black_count:
+        prior = np.linalg.inv(np.linalg.cholesky(black_cov + 1e-30 * np.eye(3)))
+        black_rows = np.zeros((3, 9))
+        black_rows[:, 6:] = prior
+        rows.append(black_rows)
+        targets.append(np.zeros(3))
     design = np.vstack(rows)
     target = np.concatenate(targets)
+    if not context.black_count:
+        design = design[:, :6]
     full, *_ = np.linalg.lstsq(design, target, rcond=None)
-    null_design = design[:, [0, 3]]
+    keep = [0, 3] + list(range(6, design.shape[1]))
+    null_design = design[:, keep]
     null, *_ = np.linalg.lstsq(null_design, target, rcond=None)
     rss_full = float(np.sum((design @ full - target) ** 2))
     rss_null = float(np.sum((null_design @ null - target) ** 2))
-    dof = target.size - 6
+    dof = 2 * int(usable.sum()) - 6
     scale = max(1.0, rss_full / dof) if dof > 0 else 1.0
     f_value = (rss_null - rss_full) / 4 / scale
     p = f_sf(f_value, 4, max(dof, 1))
@@ -340,7 +369,7 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
     shift = u0 * coefficients[0] + u0 ** 2 * coefficients[1]
     distance = float(np.hypot(*shift))
     parameter_cov = np.linalg.pinv(design.T @ design) * scale
-    gradient = np.zeros(6)
+    gradient = np.zeros(design.shape[1])
     if distance > 0:
         direction = shift / distance
         gradient[[1, 2]] = direction[0] * np.array([u0, u0 ** 2])

@@ -3,8 +3,9 @@
 Effect → term: ``black-offset`` → the black XYZ; ``tone-curve-shape`` → per
 channel the tone-curve form with the lowest BIC (GOG, extended power, or the
 monotone spline / 1D LUT); ``chromaticity-shift`` → level-dependent primaries;
-``channel-interaction`` → the load-dependent gain, its amount fitted on the
-white references (never on validation rows); ``temporal-drift`` → the fit data
+``channel-interaction`` → per-channel co-drive gains, their amounts fitted
+on the white references in X, Y and Z and their shape on the greys where
+there are greys (never on validation rows); ``temporal-drift`` → the fit data
 are divided by the drift ``g(t)`` from the white references, and predictions
 for a measurement at time ``t`` are multiplied by it.
 
@@ -30,7 +31,7 @@ TERMS = {
     "black-offset": "black/flare offset",
     "tone-curve-shape": "flexible per-channel tone curves",
     "chromaticity-shift": "level-dependent primaries",
-    "channel-interaction": "load-dependent channel interaction",
+    "channel-interaction": "per-channel co-drive interaction",
 }
 """Effect id → the model term that answers it."""
 
@@ -45,22 +46,29 @@ def fitted_on(effect: str, session) -> str:
         "black-offset": "the black (0, 0, 0) measurement",
         "tone-curve-shape": f"the {sweeps} sweep points" + (f" and {n_grey} greys" if n_grey else ""),
         "chromaticity-shift": f"the chromaticity of the {sweeps} sweep points",
-        "channel-interaction": f"the {n_white} white references against the full-drive primaries",
+        "channel-interaction": f"the {n_white} white references against the full-drive primaries"
+                               + (f", its shape on the {n_grey} greys" if n_grey >= 5 else ""),
     }[effect]
+
+
+def _grey_rows(session) -> np.ndarray:
+    rgb = session.rgb
+    return ((rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2]) & (rgb[:, 0] > 0)
+            & (rgb[:, 0] < 255))
 
 
 def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteraction | None = None):
     """Per-channel (drive, output) points implied by the grey rows, or None."""
-    greys = context.fit.mask("grey") & (context.fit.rgb[:, 0] > 0)
+    greys = _grey_rows(context.fit) & ~context.copies
     if greys.sum() < 3:
         return None
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
     target = context.fit.XYZ[greys] - context.black
-    outputs = np.linalg.solve(matrix, target.T).T
+    direct = np.linalg.solve(matrix, target.T).T
+    outputs = direct
     if interaction is not None:
         for _ in range(20):
-            outputs = np.linalg.solve(matrix, (target / interaction.gain(
-                np.clip(outputs, 0, 1).mean(axis=1))[:, None]).T).T
+            outputs = direct / interaction.channel_gains(outputs)
     drive = context.fit.rgb[greys, 0] / 255.0
     return drive, outputs
 
@@ -72,11 +80,43 @@ def _chromaticity_term(sweep: ChannelSweep) -> ChromaticityDrift | None:
     return ChromaticityDrift(tuple(tuple(float(v) for v in row) for row in fit[0]))
 
 
+INTERACTION_EXPONENTS = (0.5, 1.0, 2.0, 3.0)
+"""Co-drive exponents ``p`` tried on the greys; :data:`DEFAULT_INTERACTION_EXPONENT` without greys."""
+
+DEFAULT_INTERACTION_EXPONENT = 2.0
+
+
 def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
-    summed = sum(s.full_XYZ for s in context.sweeps)
+    """Per-channel co-drive gains: ``a_c`` from the white exactly, ``p`` from the greys.
+
+    ``W − K = Σ_c (1 − a_c) P_c`` in X, Y and Z gives the three ``a_c``; where
+    the fit rows hold at least five greys, ``p`` is the exponent of
+    :data:`INTERACTION_EXPONENTS` that predicts their XYZ best (relative
+    squared error) through power-law channel curves fitted on the sweeps.
+    """
+    matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
     white = context.white - context.black
-    ratio = float(white @ summed / (summed @ summed))
-    return ChannelInteraction(amount=1.0 - ratio)
+    amounts = 1.0 - np.linalg.solve(matrix, white)
+    summed = matrix.sum(axis=1)
+    amount = float(1.0 - white[1] / summed[1])
+    exponent = DEFAULT_INTERACTION_EXPONENT
+    greys = _grey_rows(context.fit) & ~context.copies
+    drive = context.fit.rgb[greys, 0] / 255.0
+    keep = drive > 0.1
+    if keep.sum() >= 5:
+        curves = [fit_tone_curve(*tone_data(s), "power") if s.drive.size >= 2 else None
+                  for s in context.sweeps]
+        if all(c is not None for c in curves):
+            L = np.column_stack([c.forward(drive[keep]) for c in curves])
+            measured = context.fit.XYZ[greys][keep] - context.black
+            errors = []
+            for p in INTERACTION_EXPONENTS:
+                trial = ChannelInteraction(amount, amounts=tuple(amounts), exponent=p)
+                predicted = (L * trial.channel_gains(L)) @ matrix.T
+                errors.append(float(np.sum(((predicted - measured) / measured[:, 1:2]) ** 2)))
+            exponent = INTERACTION_EXPONENTS[int(np.argmin(errors))]
+    return ChannelInteraction(amount=amount, amounts=tuple(float(a) for a in amounts),
+                              exponent=float(exponent))
 
 
 def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=None

@@ -37,9 +37,10 @@ model may be fitted on:
   :data:`DEFAULT_GAIN_SD`, :data:`DEFAULT_CHROMA_SD` and
   :data:`DEFAULT_FLOOR_FRACTION`, and the model says so.
 
-Robust scale: every estimate is a median of squared, leverage-corrected
-residuals divided by the median of χ²₁ (0.4549), so a few outliers (a
-quantization step, a bad reading) do not inflate it.
+Robust scale: every estimate is the mean of squared, leverage-corrected
+residuals winsorized at 4σ of their median-based scale, so a few outliers
+(a quantization step, a bad reading) do not inflate it and heavy-tailed
+instrument noise is not underestimated.
 """
 
 from __future__ import annotations
@@ -57,6 +58,7 @@ __all__ = [
     "DEFAULT_GAIN_SD",
     "DEFAULT_CHROMA_SD",
     "DEFAULT_FLOOR_FRACTION",
+    "DEFAULT_DOF",
     "MIN_SWEEP_LEVELS",
 ]
 
@@ -69,6 +71,9 @@ DEFAULT_CHROMA_SD = 0.0005
 
 DEFAULT_FLOOR_FRACTION = 2e-5
 """Instrument default absolute floor as a fraction of the white's Y."""
+
+DEFAULT_DOF = 1000.0
+"""Degrees of freedom given to the stated instrument default (treated as known)."""
 
 MIN_SWEEP_LEVELS = 7
 """A sweep needs this many levels for its scatter to estimate noise."""
@@ -106,6 +111,12 @@ class NoiseModel:
         Sweep points whose scatter was used.
     repeat_groups : int
         Groups of repeated patches used.
+    dof : float
+        Degrees of freedom of the estimate of ``a`` (tests use Student t / F
+        with it, so an estimate from few points cannot produce findings):
+        half the residual differences it came from (heavy-tailed noise makes
+        a variance estimate about half as precise as a Gaussian one), or
+        :data:`DEFAULT_DOF` for the stated default.
     copies : int
         Rows excluded as exact copies of an earlier row.
     """
@@ -118,6 +129,7 @@ class NoiseModel:
     source: str
     repeat_gain_sd: float | None = None
     scatter_gain_sd: float | None = None
+    dof: float = DEFAULT_DOF
     sweep_points: int = 0
     repeat_groups: int = 0
     copies: int = 0
@@ -182,7 +194,8 @@ class NoiseModel:
             "gain_sd": self.gain_sd, "chroma_sd": self.chroma_sd, "floor": self.floor,
             "source": self.source, "repeat_gain_sd": self.repeat_gain_sd,
             "scatter_gain_sd": self.scatter_gain_sd,
-            "sweep_points": self.sweep_points, "repeat_groups": self.repeat_groups,
+            "dof": self.dof, "sweep_points": self.sweep_points,
+            "repeat_groups": self.repeat_groups,
             "copies_excluded": self.copies, "summary": self.describe(),
         }
 
@@ -250,7 +263,16 @@ def _loo_operator(drive: np.ndarray, half_window: int = 3):
 
 
 def _robust_variance(squares: np.ndarray) -> float:
-    return float(np.median(squares) / _CHI2_1_MEDIAN)
+    """Mean of the squares winsorized at 16× their median-based scale (4σ).
+
+    A plain median underestimates the variance of heavy-tailed noise (a
+    Student t, which instruments show); a plain mean lets one bad reading
+    or a quantization step dominate. Winsorizing at 4σ keeps the tails that
+    noise has and caps those it does not.
+    """
+    squares = np.asarray(squares, dtype=float)
+    scale = float(np.median(squares) / _CHI2_1_MEDIAN)
+    return float(np.mean(np.minimum(squares, 16.0 * scale)))
 
 
 def estimate_noise(session: Session) -> NoiseModel:
@@ -318,12 +340,15 @@ def estimate_noise(session: Session) -> NoiseModel:
 
     sweep_points = len(gain_sq)
     scatter_gain = np.sqrt(_robust_variance(np.asarray(gain_sq))) if gain_sq else None
+    dof = DEFAULT_DOF
     if len(successive_sq) >= _MIN_POINTS:
         relative = _robust_variance(np.asarray(successive_sq))
         source = "sweep scatter"
+        dof = len(successive_sq) / 2.0
     elif repeat_gain is not None:
         relative = repeat_gain ** 2
         source = "repeats"
+        dof = max(len(repeat_sq) - groups, 1) / 2.0
     else:
         relative = DEFAULT_GAIN_SD ** 2
         source = "instrument default"
@@ -341,5 +366,5 @@ def estimate_noise(session: Session) -> NoiseModel:
     return NoiseModel(gain_sd=float(np.sqrt(gain_var)), chroma_sd=float(np.sqrt(chroma_var)),
                       floor=float(np.sqrt(floor_var)), white_Y=white_Y, white_xy=white_xy,
                       source=source, repeat_gain_sd=repeat_gain, scatter_gain_sd=scatter_gain,
-                      sweep_points=sweep_points,
+                      dof=float(dof), sweep_points=sweep_points,
                       repeat_groups=groups, copies=int(copies.sum()))

@@ -1,0 +1,262 @@
+"""An independent simulated display: effects in forms the extension does not share, noise of its own.
+
+The simulated headset (``instruments/headset.py``) and the extended model
+(``workbench/display/extended.py``) were written together: hiding the
+headset's effects and finding them with the extension's forms proves little.
+This generator shares none of their functional forms. It draws a display
+(primaries, white, per-channel power laws: the paper's model, exactly, when
+no effect is on), measures the ``paper`` plan on it with a noise model of its
+own, and hides effects in these forms:
+
+``black-offset``
+    ``bluish`` or ``reddish``: a constant black of its own chromaticity
+    (far from the white's), 0.15–1 % of white.
+``channel-interaction``
+    ``backlight``: a dynamic-contrast backlight whose gain follows the
+    *drive* (not the light) of the channels beyond the brightest,
+    ``1 + k·(Σd − max d)/2``, k = ±(5–15) %;
+    ``crosstalk``: each channel's light is scaled by the drive of the other
+    two with a per-channel coupling (a chromatic non-additivity);
+    ``power-limit``: the output falls once the luminance-weighted load
+    passes a knee above any single channel's share, 5–15 % at white.
+    Single-channel sweeps are untouched by all three.
+``chromaticity-shift``
+    ``leak``: a fraction ``β₀(1 − d)^1.5`` of each channel's light has a
+    fixed leak chromaticity; ``log-desaturation``: the fraction grows with
+    ``−ln d`` toward the white's chromaticity; xy distance 0.01–0.04 at the
+    lowest drive.
+``tone-curve-shape``
+    ``shoulder`` (compression toward full drive), ``s-curve`` (a blend with
+    a smoothstep of the power law), ``soft-toe`` (a softplus black crush);
+    1.5–6 % of full output from the nearest power law.
+``temporal-drift``
+    ``warm-up`` (``1 − m/(1 + (t/τ)²)``), ``decline`` (linear), ``step``
+    (at 30–70 % of the session), ``wander`` (two incommensurate sines);
+    2–8 % peak to peak.
+
+Noise: per measurement a Student-t (6 dof) whole-measurement gain scaled to
+``a`` (0.05–0.5 %), per-coordinate noise 0.3·a, a shot-noise term ``∝ √Y``
+and a constant floor. Imports nothing from ``instruments`` nor the
+extension; the plan's patch list is the only thing it takes from the
+workbench (and :class:`~workbench.session.Session` to hold the result).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from workbench.measurement.plans import measurement_plan
+from workbench.session import Session
+
+__all__ = ["FORMS", "GeneratedSession", "generate_session"]
+
+FORMS = {
+    "black-offset": ("bluish", "reddish"),
+    "channel-interaction": ("backlight", "crosstalk", "power-limit"),
+    "chromaticity-shift": ("leak", "log-desaturation"),
+    "tone-curve-shape": ("shoulder", "s-curve", "soft-toe"),
+    "temporal-drift": ("warm-up", "decline", "step", "wander"),
+}
+"""Effect id → the forms this generator hides it in."""
+
+
+@dataclass(frozen=True)
+class GeneratedSession:
+    session: Session
+    effects: dict = field(default_factory=dict)  # effect → (form, magnitude)
+    noise: float = 0.0
+
+
+def _unit(xy) -> np.ndarray:
+    x, y = xy
+    return np.array([x / y, 1.0, (1 - x - y) / y])
+
+
+def _xy(XYZ):
+    XYZ = np.asarray(XYZ, dtype=float)
+    return XYZ[..., :2] / XYZ.sum(axis=-1, keepdims=True)
+
+
+class _Display:
+    def __init__(self, rng: np.random.Generator):
+        self.primaries_xy = np.array([
+            [0.64 + rng.uniform(-0.02, 0.03), 0.33 + rng.uniform(-0.01, 0.01)],
+            [0.30 + rng.uniform(-0.06, 0.02), 0.60 + rng.uniform(-0.02, 0.08)],
+            [0.15 + rng.uniform(-0.01, 0.01), 0.06 + rng.uniform(-0.015, 0.02)]])
+        self.white_xy = np.array([0.3127, 0.3290]) + rng.uniform(-0.01, 0.01, 2)
+        self.white_Y = rng.uniform(60.0, 250.0)
+        units = np.column_stack([_unit(p) for p in self.primaries_xy])
+        shares = np.linalg.solve(units, _unit(self.white_xy))
+        self.columns = units * shares * self.white_Y  # XYZ of each full primary
+        self.shares = shares  # luminance share of each channel in white
+        self.gammas = rng.uniform(1.9, 2.6, 3)
+        self.tone = None  # (form, parameter)
+        self.black = np.zeros(3)
+        self.interaction = None
+        self.chromaticity = None
+        self.drift = None
+        self.session_s = 1.0
+
+    # -- the light ---------------------------------------------------------------------
+    def linear(self, d):
+        L = d ** self.gammas
+        if self.tone is None:
+            return L
+        form, p = self.tone
+        if form == "shoulder":
+            return (1 + p) * L / (1 + p * L ** 3)
+        if form == "s-curve":
+            return (1 - p) * L + p * (3 * L ** 2 - 2 * L ** 3)
+        # soft-toe: a softplus black crush at d0 = p, width p/4
+        width = p / 4
+        def crush(x):
+            return width * np.logaddexp(0.0, (x - p) / width)
+        return (crush(d) / crush(1.0)) ** self.gammas
+
+    def XYZ(self, rgb, t):
+        d = np.clip(rgb / 255.0, 0, 1)
+        L = self.linear(d)
+        light = np.zeros((len(d), 3))
+        for c in range(3):
+            unit = np.tile(self.columns[:, c] / self.columns[1, c], (len(d), 1))
+            if self.chromaticity is not None:
+                form, beta0, target = self.chromaticity
+                if form == "leak":
+                    beta = beta0 * (1 - d[:, c]) ** 1.5
+                else:
+                    beta = beta0 * np.clip(-np.log(np.maximum(d[:, c], 1e-3)) / np.log(50), 0, 1)
+                unit = (1 - beta)[:, None] * unit + beta[:, None] * _unit(target)
+            light += (self.columns[1, c] * L[:, c])[:, None] * unit * self._coupling(d, L, c)[:, None]
+        light *= self._gain(d, L)[:, None]
+        light += self.black
+        if self.drift is not None:
+            light *= self._drift(t)[:, None]
+        return light
+
+    def _coupling(self, d, L, c):
+        if self.interaction is None or self.interaction[0] != "crosstalk":
+            return np.ones(len(d))
+        _, k, coupling = self.interaction
+        others = d.sum(axis=1) - d[:, c]
+        return 1 + k * coupling[c] * others / 2
+
+    def _gain(self, d, L):
+        if self.interaction is None:
+            return np.ones(len(d))
+        form, k, _ = self.interaction
+        if form == "backlight":
+            return 1 + k * (d.sum(axis=1) - d.max(axis=1)) / 2
+        if form == "power-limit":
+            load = L @ self.shares
+            knee = self.shares.max() + 0.03
+            return 1 - k * np.clip((load - knee) / (1 - knee), 0, 1)
+        return np.ones(len(d))
+
+    def _drift(self, t):
+        form, m, p = self.drift
+        T = self.session_s
+        if form == "warm-up":
+            return 1 - m / (1 + (t / (p * T)) ** 2)
+        if form == "decline":
+            return 1 - m * t / T
+        if form == "step":
+            return np.where(t < p * T, 1.0, 1.0 - m)
+        phase1, phase2 = p
+        return 1 + m / 2 * (0.6 * np.sin(2 * np.pi * 1.7 * t / T + phase1)
+                            + 0.4 * np.sin(2 * np.pi * 2.9 * t / T + phase2))
+
+
+def _hide(display: _Display, effect: str, form: str, rng: np.random.Generator) -> float:
+    """Switch ``effect`` on in ``form`` with a random magnitude; return the magnitude."""
+    if effect == "black-offset":
+        level = rng.uniform(0.0015, 0.01)
+        xy = (0.24, 0.22) if form == "bluish" else (0.37, 0.31)
+        display.black = _unit(xy) * level * display.white_Y
+        return level
+    if effect == "channel-interaction":
+        k = rng.uniform(0.05, 0.15)
+        if form == "backlight":
+            k *= rng.choice([-1.0, 1.0])
+        coupling = np.array([1.0, 0.5, -0.4])[rng.permutation(3)]
+        display.interaction = (form, k, coupling)
+        return k
+    if effect == "chromaticity-shift":
+        distance = rng.uniform(0.01, 0.04)
+        target = (0.33, 0.36) if form == "leak" else tuple(display.white_xy)
+        display.chromaticity = (form, 0.0, target)
+        # β₀ so that the xy distance of the farthest-moving primary at DAC 13 is ``distance``
+        low = np.array([[13.0, 0, 0], [0, 13.0, 0], [0, 0, 13.0]])
+        reference = _xy(display.columns.T)
+        low_beta, high_beta = 0.0, 1.0
+        for _ in range(40):
+            beta0 = (low_beta + high_beta) / 2
+            display.chromaticity = (form, beta0, target)
+            moved = _xy(display.XYZ(low, np.zeros(3)) - display.black)
+            if np.max(np.linalg.norm(moved - reference, axis=1)) > distance:
+                high_beta = beta0
+            else:
+                low_beta = beta0
+        return distance
+    if effect == "tone-curve-shape":
+        parameter = {"shoulder": rng.uniform(0.15, 0.5), "s-curve": rng.uniform(0.12, 0.35),
+                     "soft-toe": rng.uniform(0.03, 0.08)}[form]
+        display.tone = (form, parameter)
+        return parameter
+    if effect == "temporal-drift":
+        m = rng.uniform(0.02, 0.08)
+        parameter = {"warm-up": rng.uniform(0.08, 0.25), "decline": None,
+                     "step": rng.uniform(0.3, 0.7),
+                     "wander": tuple(rng.uniform(0, 2 * np.pi, 2))}[form]
+        display.drift = (form, m, parameter)
+        return m
+    raise ValueError(f"unknown effect {effect!r}; use one of {sorted(FORMS)}")
+
+
+def generate_session(effects: dict | None = None, seed: int = 0,
+                     noise: float | None = None) -> GeneratedSession:
+    """The ``paper`` plan measured on an independent display with ``effects`` hidden.
+
+    Parameters
+    ----------
+    effects : dict
+        Effect id → form (a value of :data:`FORMS`).
+    seed : int
+        Seeds the display, the magnitudes, the plan's validation colours and the noise.
+    noise : float, optional
+        Relative gain noise ``a``; drawn from 0.05–0.5 % when None.
+    """
+    rng = np.random.default_rng([seed, 90411])
+    display = _Display(rng)
+    hidden = {}
+    for effect, form in (effects or {}).items():
+        if form not in FORMS[effect]:
+            raise ValueError(f"{effect} has no form {form!r}; use one of {FORMS[effect]}")
+        hidden[effect] = (form, _hide(display, effect, form, rng))
+    a = float(rng.uniform(0.0005, 0.005)) if noise is None else float(noise)
+    plan = measurement_plan("paper", seed)
+    rgb = np.array([patch.rgb for patch in plan.patches], dtype=float)
+    kinds = np.array([patch.kind for patch in plan.patches], dtype=object)
+    # the clock: 4 s a patch, up to 40 s more for dark ones (a longer integration)
+    clean_Y = display.XYZ(rgb, np.zeros(len(rgb)))[:, 1] if display.drift is None else None
+    if clean_Y is None:
+        saved, display.drift = display.drift, None
+        clean_Y = display.XYZ(rgb, np.zeros(len(rgb)))[:, 1]
+        display.drift = saved
+    durations = 4.0 + 40.0 * np.exp(-np.maximum(clean_Y, 0) / (0.01 * display.white_Y))
+    t = np.cumsum(durations)
+    display.session_s = float(t[-1])
+    XYZ = display.XYZ(rgb, t)
+    gain = a * rng.standard_t(6, len(rgb)) / np.sqrt(6 / 4)
+    per_coordinate = 0.3 * a * rng.standard_normal((len(rgb), 3))
+    floor = rng.uniform(2e-5, 1e-4) * display.white_Y
+    shot = 0.1 * a * np.sqrt(np.abs(XYZ) * display.white_Y) * rng.standard_normal((len(rgb), 3))
+    measured = (XYZ * (1 + gain[:, None] + per_coordinate) + shot
+                + floor * rng.standard_normal((len(rgb), 3)))
+    session = Session(kind=kinds, rgb=rgb, XYZ=measured, t_s=t,
+                      source=f"independent generator, seed {seed}, "
+                             + (", ".join(f"{e} ({f})" for e, (f, _) in hidden.items()) or "clean"),
+                      metadata={"generator": "independent", "effects": {e: f for e, (f, _) in
+                                                                       hidden.items()}})
+    return GeneratedSession(session=session, effects=hidden, noise=a)
