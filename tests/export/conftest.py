@@ -1,0 +1,59 @@
+"""Shared fixtures of the runtime-bundle tests: bundles exported once per session."""
+
+import numpy as np
+import pytest
+
+from profiles import example_profile_path
+from workbench.hyperspectral import synthesize_cube
+from workbench.hyperspectral.synthetic import PAPER_CUBE_WAVELENGTHS
+from workbench.profile import load_profile
+
+BUNDLE_LIGHTS = ("cie-d65", "cie-a", "d65-two-peak")
+
+
+@pytest.fixture(scope="session")
+def paint_cube():
+    """48 × 40 texels of ColorChecker + CIE 2017 reflectances mixed smoothly."""
+    return synthesize_cube(48, 40, cell=8, seed=11)
+
+
+@pytest.fixture(scope="session")
+def unseen_cube():
+    """A cube of materials in neither the ColorChecker nor the CIE 2017 set (CIE TCS, NIST CQS)."""
+    from workbench.hyperspectral.materials import material_reflectances
+
+    spectra = np.vstack([material_reflectances("cie-tcs", PAPER_CUBE_WAVELENGTHS),
+                         material_reflectances("nist-cqs-vs", PAPER_CUBE_WAVELENGTHS)])
+    return synthesize_cube(48, 40, cell=8, seed=5, reflectances=spectra,
+                           materials="CIE TCS + NIST CQS")
+
+
+@pytest.fixture(scope="session")
+def simulated_profile():
+    """The shipped simulated-headset profile: extended model with channel interaction (not separable)."""
+    return load_profile(example_profile_path("simulated-headset"))
+
+
+@pytest.fixture(scope="session")
+def vive_profile():
+    return load_profile(example_profile_path("htc-vive-paper"))
+
+
+@pytest.fixture(scope="session")
+def simulated_bundle(tmp_path_factory, simulated_profile, paint_cube):
+    from workbench.export import write_bundle
+
+    directory = tmp_path_factory.mktemp("bundles") / "simulated"
+    summary = write_bundle(simulated_profile, directory, light_ids=BUNDLE_LIGHTS,
+                           cubes=[("paint", paint_cube)])
+    return directory, summary
+
+
+@pytest.fixture(scope="session")
+def vive_bundle(tmp_path_factory, vive_profile, paint_cube):
+    from workbench.export import write_bundle
+
+    directory = tmp_path_factory.mktemp("bundles") / "vive"
+    summary = write_bundle(vive_profile, directory, light_ids=BUNDLE_LIGHTS,
+                           cubes=[("paint", paint_cube)])
+    return directory, summary
