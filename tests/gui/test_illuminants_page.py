@@ -46,6 +46,7 @@ def test_table_lists_every_source_with_metrics_and_follows_the_workspace(page, q
     assert [c.source for c in page.swatches._comparisons] == ["cie-d65", "d65-two-peak"]
     page.filter.setText("fl3")
     assert 0 < page.proxy.rowCount() < page.model.rowCount()
+    assert page.workspace.selected_sources == ("cie-d65", "d65-two-peak")  # filtering keeps them
     page.filter.setText("")
     page.workspace.set_selected_sources(["cie-a"])
     assert page._selected_ids() == ["cie-a"]

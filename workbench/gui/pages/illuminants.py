@@ -108,7 +108,7 @@ class IlluminantsPage(QWidget):
         self.filter = QLineEdit()
         self.filter.setPlaceholderText("Filter: id, name, kind … (e.g. fl, led, measured)")
         self.filter.setClearButtonEnabled(True)
-        self.filter.textChanged.connect(self.proxy.setFilterFixedString)
+        self.filter.textChanged.connect(self._apply_filter)
         self.progress = QProgressBar()
         self.progress.setFormat("computing Rf, Rg, CCT … %v of %m sources")
         self.progress.setMaximumWidth(340)
@@ -364,6 +364,16 @@ class IlluminantsPage(QWidget):
     def _selected_ids(self) -> list[str]:
         rows = self.table.selectionModel().selectedRows()
         return [self.model.ids()[self.proxy.mapToSource(index).row()] for index in rows]
+
+    def _apply_filter(self, text: str) -> None:
+        # Filtering hides rows; it does not deselect sources: the rows it
+        # removes leave the table's selection without touching the workspace's.
+        self._syncing = True
+        try:
+            self.proxy.setFilterFixedString(text)
+        finally:
+            self._syncing = False
+        self._select_rows(self.workspace.selected_sources)
 
     def _on_table_selection(self, *_):
         if self._syncing:
