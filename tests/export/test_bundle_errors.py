@@ -1,0 +1,96 @@
+"""A damaged bundle gives the runtime one clear error (exit status 2), never a traceback or a wrong texture."""
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from tests.export.test_conformance import consumer_module
+
+
+@pytest.fixture
+def damaged(tmp_path, simulated_bundle):
+    source, _ = simulated_bundle
+    copy = tmp_path / "bundle"
+    shutil.copytree(source, copy)
+    return copy
+
+
+def _edit_json(path, change):
+    document = json.loads(path.read_text())
+    change(document)
+    path.write_text(json.dumps(document))
+
+
+def _truncate(path):
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+
+
+DAMAGES = {
+    "truncated coefficients": (lambda b: _truncate(b / "level2/paint/coefficients.bin"),
+                               ["texture", "paint", "--light", "cie-a"], "truncated"),
+    "oversized correction table": (
+        lambda b: (b / "display_drive_correction.bin").write_bytes(
+            (b / "display_drive_correction.bin").read_bytes() * 2),
+        ["texture", "paint", "--light", "cie-a"], "bytes where its header promises"),
+    "truncated lights.json": (lambda b: _truncate(b / "lights.json"), ["light", "cie-a"],
+                              "not valid JSON"),
+    "NaN in a level-2 matrix": (
+        lambda b: (b / "level2/paint/lights.json").write_text(
+            (b / "level2/paint/lights.json").read_text().replace('"offset": [', '"offset": [NaN, ', 1)),
+        ["texture", "paint", "--light", "cie-d65"], "NaN is not a JSON number"),
+    "rgb8 as strings": (
+        lambda b: _edit_json(b / "lights.json",
+                             lambda d: d["lights"][0].update(rgb8=["240", "234", "223"])),
+        ["light", "cie-d65"], "'rgb8' must be a list of 3 numbers"),
+    "texel table out of range": (
+        lambda b: _edit_json(b / "level2/paint/lights.json",
+                             lambda d: d["lights"][0]["texel_table"].__setitem__(5, 999)),
+        ["texture", "paint", "--light", "cie-d65"], "'texel_table' holds a value out of range"),
+    "newer bundle version": (
+        lambda b: _edit_json(b / "bundle.json", lambda d: d.update(format_version=2)),
+        ["light", "cie-d65"], r"bundle format_version 2 is newer than this consumer supports \(1\)"),
+    "version as a string": (
+        lambda b: _edit_json(b / "bundle.json", lambda d: d.update(format_version="1")),
+        ["light", "cie-d65"], "format_version must be an integer"),
+    "not a bundle": (lambda b: _edit_json(b / "bundle.json", lambda d: d.update(format="zip")),
+                     ["light", "cie-d65"], "not a VR colour workbench bundle"),
+    "missing inverse": (lambda b: (b / "display_inverse.json").unlink(),
+                        ["texture", "paint", "--light", "cie-a"], "missing from the bundle"),
+    "thresholds of the wrong length": (
+        lambda b: _edit_json(b / "display_inverse.json", lambda d: d["thresholds"].pop()),
+        ["texture", "paint", "--light", "cie-a"], "'thresholds' must be a list of 765 numbers"),
+    "layers that do not fit the channels": (
+        lambda b: _edit_json(b / "level2/paint/coefficients.json", lambda d: d.update(layers=1)),
+        ["texture", "paint", "--light", "cie-a"], "channels need"),
+    "unknown light": (lambda b: None, ["light", "cie-f2"], "no light 'cie-f2'"),
+    "unknown texture": (lambda b: None, ["texture", "../etc", "--light", "cie-a"],
+                        "no level-2 texture '../etc'"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(DAMAGES))
+def test_damaged_bundles_give_one_clear_error(damaged, tmp_path, capsys, name):
+    damage, args, message = DAMAGES[name]
+    damage(damaged)
+    module = consumer_module(damaged)
+    out = tmp_path / "t.png"
+    argv = [str(damaged), *args] + (["--out", str(out)] if args[0] == "texture" else [])
+    assert module.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1
+    import re
+
+    assert re.search(message, err), err
+    assert not out.exists()
+
+
+def test_the_undamaged_copy_works(damaged, tmp_path, capsys):
+    module = consumer_module(damaged)
+    assert module.main([str(damaged), "texture", "paint", "--light", "cie-a",
+                        "--out", str(tmp_path / "t.png")]) == 0
+    assert module.main([str(damaged), "cube", "1", "1", "1"]) == 0
+    dac = json.loads(capsys.readouterr().out.splitlines()[-1])["dac"]
+    assert np.all(np.array(dac) > 200)
