@@ -112,3 +112,19 @@ def test_profile_change_recomputes_the_headset_light_colour(page, qtbot):
         page.workspace.set_profile(Profile.from_display_model(SRGBDisplay(), device={"name": "sRGB"}))
     after = page.model.row_of("cie-a")
     assert after.rgb8_profile == after.rgb8_srgb != before
+
+
+def test_a_broken_user_library_file_is_named_and_the_rest_listed(qtbot, tmp_path, monkeypatch):
+    from workbench.illuminants import get_illuminant
+
+    monkeypatch.setenv(USER_LIBRARY_ENV, str(tmp_path / "library"))
+    library = UserLibrary()
+    broken = library.add(get_illuminant("cie-fl2"), name="tube")
+    (tmp_path / "library" / f"{broken}.csv").write_text("wavelength,value\n380,oops\n")
+    page = IlluminantsPage(Workspace())
+    qtbot.addWidget(page)
+    with qtbot.waitSignal(page.rows_ready, timeout=60000):
+        page.show()
+    assert page.model.rowCount() == len(list_illuminants())
+    assert broken in page.status.text() and "not numeric" in page.status.text()
+    page.shutdown()

@@ -306,11 +306,16 @@ class IlluminantsPage(QWidget):
         library = self.library
         self.progress.setRange(0, len(ids))
         self.progress.setValue(0)
+        self._skipped = []
         self.progress.show()
 
         def rows():
             for i, source_id in enumerate(ids):
-                yield i + 1, source_row(resolve_illuminant(source_id, library), display, k=k)
+                try:
+                    row = source_row(resolve_illuminant(source_id, library), display, k=k)
+                except WorkbenchError as error:  # e.g. a user-library file edited by hand
+                    row = f"{source_id}: {_error_text(error)}"
+                yield i + 1, row
 
         worker = self._run(rows, yielded=self._on_row, generator=True)
         worker._is_rows = True
@@ -318,15 +323,21 @@ class IlluminantsPage(QWidget):
 
     def _on_row(self, item) -> None:
         count, row = item
-        self.model.put(row)
         self.progress.setValue(count)
+        if isinstance(row, str):
+            self._skipped.append(row)
+            return
+        self.model.put(row)
         if row.id in self.workspace.selected_sources:
             self._select_rows(self.workspace.selected_sources)
 
     def _on_rows_finished(self) -> None:
         self.progress.hide()
-        self.status.setText(f"{self.model.rowCount()} sources; select several (Ctrl/Shift-click) "
-                            "to compare them")
+        text = (f"{self.model.rowCount()} sources; select several (Ctrl/Shift-click) to compare "
+                "them")
+        if self._skipped:
+            text += f". Not shown ({len(self._skipped)}): " + "; ".join(self._skipped)
+        self.status.setText(text)
         self.rows_ready.emit()
 
     def _on_worker_finished(self) -> None:
@@ -402,12 +413,18 @@ class IlluminantsPage(QWidget):
         ids = self.workspace.selected_sources
         if tuple(self._selected_ids()) != tuple(ids):
             self._select_rows(ids)
-        self._update_plot(ids)
-        self._update_swatches(ids)
+        try:
+            self._update_plot(ids)
+            self._update_swatches(ids)
+        except WorkbenchError as error:
+            self._show_error("Cannot show the selected sources", _error_text(error))
 
     def _on_profile_changed(self) -> None:
         self._comparisons.clear()
-        self._update_swatches(self.workspace.selected_sources)
+        try:
+            self._update_swatches(self.workspace.selected_sources)
+        except WorkbenchError as error:
+            self._show_error("Cannot show the selected sources", _error_text(error))
         self._start_rows()
 
     def _update_plot(self, ids) -> None:

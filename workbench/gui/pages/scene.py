@@ -28,6 +28,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from workbench.errors import WorkbenchError
 from workbench.illuminants.user_library import resolve_illuminant
 from workbench.scene import LEVELS, level_images, patch_errors, scene_content
 from workbench.scene.booth import board_patch_world_point, booth_camera, build_booth, relight_booth
@@ -244,6 +245,13 @@ class ScenePage(QWidget):
     def _relight(self) -> None:
         if getattr(self, "_shut", False):
             return
+        try:
+            self._relight_now()
+        except WorkbenchError as error:  # e.g. a user-library spectrum that no longer reads
+            self.caption.setText(f"Cannot show {self._source_id}: {error}")
+            self.source_changed.emit(self._source_id)
+
+    def _relight_now(self) -> None:
         profile = self.workspace.profile
         display = profile.display_model()
         illuminant = resolve_illuminant(self._source_id)
