@@ -75,11 +75,80 @@ def _diagnose_run(args: argparse.Namespace):
     return benchmark_diagnose(args.repeats)
 
 
+def _gui_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--plan", default="quick", choices=("quick", "paper"),
+                        help="plan of the simulated calibration whose event-loop stalls are measured (default quick)")
+    parser.add_argument("--time-scale", type=float, default=0.01,
+                        help="fraction of real instrument timing the emulator waits (default 0.01)")
+
+
+def _gui_run(args: argparse.Namespace):
+    # workbench.gui is imported by name only: nothing outside it may import it (import-linter).
+    import importlib
+
+    from workbench.errors import WorkbenchError
+
+    try:
+        benchmark = importlib.import_module("workbench.gui.benchmark")
+    except ImportError as error:
+        raise WorkbenchError(f"bench gui needs Qt (PySide6), which cannot be loaded here ({error})") from None
+    return benchmark.benchmark_gui(plan=args.plan, time_scale=args.time_scale)
+
+
+def _real_data_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--folder", help="the real-data folder (default: shared/data/real beside "
+                                         "the checkout, or $VR_WORKBENCH_SHARED/data/real)")
+    parser.add_argument("--markdown", action="store_true", help="print the README's table")
+    parser.add_argument("--no-argyll", action="store_true", help="leave the Argyll peer out")
+
+
+def _real_data_run(args: argparse.Namespace):
+    from workbench.diagnostics.real_data import real_data_table
+
+    table = real_data_table(args.folder, with_argyll=not args.no_argyll)
+    if args.markdown:
+        return _Markdown(table)
+    return table
+
+
+@dataclass(frozen=True)
+class _Markdown:
+    table: object
+
+    def to_json(self) -> dict:
+        return self.table.to_json()
+
+    def summary(self) -> str:
+        return self.table.markdown()
+
+
+def _suite_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--seed", type=int, default=0, help="suite seed (default 0)")
+
+
+def _suite_run(args: argparse.Namespace):
+    try:
+        from tests.diagnostics.suite import run_suite
+    except ImportError as error:
+        from workbench.errors import WorkbenchError
+
+        raise WorkbenchError("the acceptance suite's independent generator lives in the "
+                             f"checkout's tests/diagnostics ({error}); run this from the "
+                             "checkout's root") from None
+    return run_suite(args.seed)
+
+
 BENCHMARKS: dict[str, Benchmark] = {
     "relight": Benchmark("level-2 relight: spectral-basis kernel vs the full-band path",
                          _relight_arguments, _relight_run),
     "diagnose": Benchmark("diagnose on a 214-measurement session, wall time with start-up",
                           _diagnose_arguments, _diagnose_run),
+    "real-data": Benchmark("every real display in shared/data/real diagnosed, beside Argyll's "
+                           "shaper + matrix", _real_data_arguments, _real_data_run),
+    "diagnose-suite": Benchmark("the seeded acceptance suite of the independent generator: "
+                                "false-finding and detection rates", _suite_arguments, _suite_run),
+    "gui": Benchmark("the window: event-loop stalls while calibrating, source switch, first paint",
+                     _gui_arguments, _gui_run),
 }
 """Benchmark name → :class:`Benchmark`."""
 

@@ -31,7 +31,9 @@ paper's model holds for this effect":
     per channel, ``K + k·d^γ`` against ``K + k·f(d)`` with ``f`` GOG or
     extended power (one more parameter each), weighted by the noise model,
     black rows at ``d = 0``: F-test of the extra parameter; the smallest p
-    times 2 forms times the channels tested. Statistic: the largest gap
+    times 2 forms times the channels tested. A channel whose sweep is too
+    short (a DisplayCAL ``.ti3`` has 4 levels) is tested on its sweep and the
+    channel outputs the greys imply, in normalized output. Statistic: the largest gap
     between the two fitted curves, in normalized output.
 
 The F-tests divide by the larger of the noise model and the fit's own
@@ -432,23 +434,39 @@ def _fit_shape(form, drive, Y, sd, black_guess, full_guess):
     return result.x, float(np.sum(result.fun ** 2))
 
 
-def _tone_test(sweep: ChannelSweep, context: DiagnosisContext):
-    """(p, gap, gap SE, better form) of one channel, or None with too few levels."""
-    inner = sweep.drive < 1.0
-    if inner.sum() < MIN_TONE_LEVELS:
+def _grey_points(context: DiagnosisContext):
+    """(drive, per-channel outputs (n, 3), their standard deviations (n, 3)) from the greys, or None.
+
+    Each grey's black-subtracted XYZ is solved for the three channel outputs
+    through the full-drive primaries (as the extension does); the outputs
+    carry the grey's relative luminance noise plus the floor over each
+    primary's luminance.
+    """
+    rgb = context.fit.rgb
+    greys = ((rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2]) & (rgb[:, 0] > 0)
+             & (rgb[:, 0] < 255) & ~context.copies)
+    if greys.sum() < MIN_GREY_LEVELS:
         return None
-    black = context.black
-    Y = np.concatenate([np.full(context.black_count, black[1]) if context.black_count else [],
-                        sweep.XYZ[:, 1] + black[1]])
-    drive = np.concatenate([np.zeros(context.black_count), sweep.drive])
-    counts = np.concatenate([np.ones(context.black_count), sweep.counts])
-    sd = context.noise.sd_Y(Y) / np.sqrt(counts)
-    full = float(sweep.full_XYZ[1])
-    null, rss_null = _fit_shape("power", drive, Y, sd, black[1], full)
+    matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
+    XYZ = context.fit.XYZ[greys]
+    outputs = np.linalg.solve(matrix, (XYZ - context.black).T).T
+    relative = context.noise.sd_Y(XYZ[:, 1]) / np.abs(XYZ[:, 1])
+    full_Y = np.array([s.full_XYZ[1] for s in context.sweeps])
+    sd = np.hypot(np.abs(outputs) * relative[:, None], context.noise.floor / full_Y)
+    return rgb[greys, 0] / 255.0, outputs, sd
+
+
+MIN_GREY_LEVELS = 7
+"""Greys a channel's shape may be tested on where its own sweep is too short."""
+
+
+def _tone_test_points(drive, Y, sd, black_guess, full):
+    """(p, gap, gap SE, better form, z): power law against GOG / extended power, F-test."""
+    null, rss_null = _fit_shape("power", drive, Y, sd, black_guess, full)
     grid = np.linspace(0, 1, 256)
     best = (1.0, 0.0, 0.0, "power", float("-inf"))
     for form in ("gog", "extended-power"):
-        alternative, rss_alt = _fit_shape(form, drive, Y, sd, black[1], full)
+        alternative, rss_alt = _fit_shape(form, drive, Y, sd, black_guess, full)
         dof = Y.size - 4
         if dof < 1:
             continue
@@ -463,12 +481,41 @@ def _tone_test(sweep: ChannelSweep, context: DiagnosisContext):
     return best
 
 
+def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
+    """(p, gap, gap SE, better form, z) of one channel, or None with too few levels.
+
+    On the channel's own sweep (black rows at ``d = 0``) in absolute Y; where
+    the sweep has fewer than :data:`MIN_TONE_LEVELS` levels below full drive,
+    on the sweep and the grey-derived outputs together, in normalized output.
+    """
+    inner = sweep.drive < 1.0
+    if inner.sum() >= MIN_TONE_LEVELS:
+        black = context.black
+        Y = np.concatenate([np.full(context.black_count, black[1]) if context.black_count else [],
+                            sweep.XYZ[:, 1] + black[1]])
+        drive = np.concatenate([np.zeros(context.black_count), sweep.drive])
+        counts = np.concatenate([np.ones(context.black_count), sweep.counts])
+        sd = context.noise.sd_Y(Y) / np.sqrt(counts)
+        return _tone_test_points(drive, Y, sd, black[1], float(sweep.full_XYZ[1]))
+    if greys is None:
+        return None
+    grey_drive, outputs, grey_sd = greys
+    full_Y = float(sweep.full_XYZ[1])
+    drive = np.concatenate([sweep.drive, grey_drive])
+    L = np.concatenate([sweep.output, outputs[:, sweep.channel]])
+    sd = np.concatenate([context.noise.sd_Y(sweep.XYZ[:, 1] + context.black[1]) / full_Y
+                         / np.sqrt(sweep.counts), grey_sd[:, sweep.channel]])
+    return _tone_test_points(drive, L, sd, 0.0, 1.0)
+
+
 def detect_tone_curve_shape(context: DiagnosisContext) -> DetectorResult:
-    tests = [_tone_test(s, context) for s in context.sweeps]
+    greys = _grey_points(context)
+    tests = [_tone_test(s, context, greys) for s in context.sweeps]
     tested = [t for t in tests if t is not None]
     if not tested:
         return _untestable("tone-curve-shape", f"no sweep has {MIN_TONE_LEVELS} levels below "
-                                               "full drive")
+                                               f"full drive and there are fewer than "
+                                               f"{MIN_GREY_LEVELS} greys")
     p_values = [1.0 if t is None else t[0] for t in tests]
     worst = int(np.argmin(p_values))
     p = min(1.0, len(tested) * p_values[worst])
