@@ -50,7 +50,7 @@ def test_table_lists_every_source_with_metrics_and_follows_the_workspace(page, q
     page.filter.setText("")
     page.workspace.set_selected_sources(["cie-a"])
     assert page._selected_ids() == ["cie-a"]
-    assert page._curves["cie-a"].isVisible() and not page._curves["cie-d65"].isVisible()
+    assert page.plot.curve("cie-a").isVisible() and not page.plot.curve("cie-d65").isVisible()
     # Selecting in the table selects in the workspace.
     page.table.selectRow(page.proxy.mapFromSource(page.model.index(
         page.model.ids().index("cie-fl2"), 0)).row())

@@ -1,7 +1,9 @@
-"""Widgets of the Illuminants page: the source table model, the ColorChecker swatches, the measure dialog."""
+"""Widgets of the Illuminants page: the source table model, the spectra plot, the ColorChecker swatches, the measure dialog."""
 
 from __future__ import annotations
 
+import numpy as np
+import pyqtgraph as pg
 from PySide6.QtCore import QAbstractTableModel, QModelIndex, QRectF, QSize, Qt
 from PySide6.QtGui import QColor, QFont, QPainter, QPen
 from PySide6.QtWidgets import (
@@ -16,7 +18,7 @@ from PySide6.QtWidgets import (
 )
 
 __all__ = ["SOURCE_COLUMNS", "SourceTableModel", "ColorCheckerSwatches", "MeasureLightDialog",
-           "SIMULATED_INSTRUMENT"]
+           "SpectraPlot", "SIMULATED_INSTRUMENT"]
 
 SOURCE_COLUMNS = ("Id", "Name", "Kind", "CCT (K)", "Duv", "Rf", "Rg", "x", "y",
                   "Light RGB (headset)", "Light RGB (sRGB)")
@@ -231,3 +233,51 @@ class MeasureLightDialog(QDialog):
         simulated = self.instrument.currentData() is None
         self.booth_source.setEnabled(simulated)
         self.illuminance.setEnabled(simulated)
+
+
+class SpectraPlot(pg.PlotWidget):
+    """Relative SPDs (each scaled to a maximum of 1) of the selected sources; one curve per source, reused."""
+
+    COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
+               "#17becf", "#7f7f7f", "#bcbd22")
+
+    def __init__(self, parent=None):
+        super().__init__(parent, background="w")
+        self._curves: dict[str, pg.PlotDataItem] = {}
+        self.setLabel("bottom", "Wavelength", units="nm")
+        self.setLabel("left", "Relative spectral power (max = 1)")
+        self.showGrid(x=True, y=True, alpha=0.25)
+        self.setXRange(380, 780, padding=0.01)
+        self.setYRange(0, 1.05, padding=0)
+        for name in ("bottom", "left"):
+            axis = self.getPlotItem().getAxis(name)
+            axis.setPen(pg.mkPen("#444"))
+            axis.setTextPen(pg.mkPen("#111"))
+            axis.enableAutoSIPrefix(False)
+        self.setTitle("Spectra of the selected sources", color="#111", size="10pt")
+        self.legend = self.addLegend(offset=(10, 10), labelTextSize="9pt", labelTextColor="#111",
+                                     brush=pg.mkBrush(255, 255, 255, 200))
+        self.setMinimumHeight(220)
+
+    def curve(self, source_id: str):
+        """The curve of ``source_id`` (None if it was never shown)."""
+        return self._curves.get(source_id)
+
+    def show_sources(self, illuminants) -> None:
+        """Show exactly these sources, in this order (colours by position)."""
+        ids = [illuminant.id for illuminant in illuminants]
+        for source_id, curve in self._curves.items():
+            self.legend.removeItem(curve)
+            if source_id not in ids:
+                curve.hide()
+        for i, illuminant in enumerate(illuminants):
+            values = np.asarray(illuminant.sd.values, dtype=float)
+            peak = values.max()
+            curve = self._curves.get(illuminant.id)
+            if curve is None:
+                curve = self.plot()
+                self._curves[illuminant.id] = curve
+            self.legend.addItem(curve, illuminant.name)
+            curve.setPen(pg.mkPen(self.COLOURS[i % len(self.COLOURS)], width=2))
+            curve.setData(illuminant.sd.wavelengths, values / peak if peak > 0 else values)
+            curve.show()

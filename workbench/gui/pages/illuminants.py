@@ -13,10 +13,6 @@ persistent user library (:class:`workbench.illuminants.user_library.UserLibrary`
 
 from __future__ import annotations
 
-import threading
-
-import numpy as np
-import pyqtgraph as pg
 from PySide6.QtCore import QItemSelection, QItemSelectionModel, QSortFilterProxyModel, Qt, Signal
 from PySide6.QtWidgets import (
     QAbstractItemView,
@@ -34,23 +30,21 @@ from PySide6.QtWidgets import (
     QVBoxLayout,
     QWidget,
 )
-from superqt.utils import thread_worker
 
 from workbench.errors import WorkbenchError
+from workbench.gui.jobs import start_job
 from workbench.gui.widgets_illuminants import (
     SORT_ROLE,
     ColorCheckerSwatches,
     MeasureLightDialog,
     SourceTableModel,
+    SpectraPlot,
 )
 from workbench.illuminants import list_illuminants, read_illuminant_file, write_illuminant_file
 from workbench.illuminants.comparison import colorchecker_comparison, source_row
 from workbench.illuminants.user_library import UserLibrary, resolve_illuminant
 
 __all__ = ["IlluminantsPage"]
-
-_PLOT_COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
-                 "#17becf", "#7f7f7f", "#bcbd22")
 
 MEASURE_TIME_SCALE = 0.02
 """How long the simulated CS-2000 makes a measurement wait, as a fraction of the real timing."""
@@ -78,8 +72,7 @@ class IlluminantsPage(QWidget):
         super().__init__(parent)
         self.workspace = workspace
         self.library = library or UserLibrary()
-        self._workers = []  # (worker, done event)
-        self._curves: dict[str, pg.PlotDataItem] = {}
+        self._workers = []  # workbench.gui.jobs.Job
         self._comparisons: dict[tuple, object] = {}
         self._syncing = False
         self.last_error: str | None = None
@@ -131,21 +124,7 @@ class IlluminantsPage(QWidget):
         self.status = QLabel()
 
         # -- plot -----------------------------------------------------------
-        self.plot = pg.PlotWidget(background="w")
-        self.plot.setLabel("bottom", "Wavelength", units="nm")
-        self.plot.setLabel("left", "Relative spectral power (max = 1)")
-        self.plot.showGrid(x=True, y=True, alpha=0.25)
-        self.plot.setXRange(380, 780, padding=0.01)
-        self.plot.setYRange(0, 1.05, padding=0)
-        for name in ("bottom", "left"):
-            axis = self.plot.getPlotItem().getAxis(name)
-            axis.setPen(pg.mkPen("#444"))
-            axis.setTextPen(pg.mkPen("#111"))
-        self.plot.getPlotItem().getAxis("bottom").enableAutoSIPrefix(False)
-        self.plot.setTitle("Spectra of the selected sources", color="#111", size="10pt")
-        self.legend = self.plot.addLegend(offset=(10, 10), labelTextSize="9pt",
-                                          labelTextColor="#111", brush=pg.mkBrush(255, 255, 255, 200))
-        self.plot.setMinimumHeight(220)
+        self.plot = SpectraPlot()
 
         self.swatches = ColorCheckerSwatches()
         swatch_scroll = QScrollArea()
@@ -194,7 +173,7 @@ class IlluminantsPage(QWidget):
     @property
     def busy(self) -> bool:
         """Whether a worker (metrics, measurement) is still running."""
-        return any(not done.is_set() for _, done in self._workers)
+        return any(job.running for job in self._workers)
 
     def all_ids(self) -> list[str]:
         """Every source the table lists: the built-in library, then the user library."""
@@ -267,38 +246,15 @@ class IlluminantsPage(QWidget):
 
     # -- workers ------------------------------------------------------------------
     def _run(self, function, *, returned=None, yielded=None, generator=False):
-        done = threading.Event()
-
-        if generator:
-            @thread_worker(start_thread=False)
-            def job():
-                try:
-                    yield from function()
-                finally:
-                    done.set()
-        else:
-            @thread_worker(start_thread=False)
-            def job():
-                try:
-                    return function()
-                finally:
-                    done.set()
-
-        worker = job()
-        if returned is not None:
-            worker.returned.connect(returned)
-        if yielded is not None:
-            worker.yielded.connect(yielded)
-        worker.errored.connect(lambda error: self._on_worker_error(error))
-        worker.finished.connect(self._on_worker_finished)
-        self._workers.append((worker, done))
-        worker.start()
-        return worker
+        job = start_job(function, generator=generator, returned=returned, yielded=yielded,
+                        errored=self._on_worker_error, finished=self._on_worker_finished)
+        self._workers.append(job)
+        return job.worker
 
     def _start_rows(self) -> None:
-        for worker, _ in self._workers:
-            if hasattr(worker, "quit") and getattr(worker, "_is_rows", False):
-                worker.quit()
+        for job in self._workers:
+            if job.tag == "rows":
+                job.quit()
         profile = self.workspace.profile
         display = profile.display_model()
         k = profile.k
@@ -318,7 +274,7 @@ class IlluminantsPage(QWidget):
                 yield i + 1, row
 
         worker = self._run(rows, yielded=self._on_row, generator=True)
-        worker._is_rows = True
+        self._workers[-1].tag = "rows"
         worker.finished.connect(self._on_rows_finished)
 
     def _on_row(self, item) -> None:
@@ -341,7 +297,7 @@ class IlluminantsPage(QWidget):
         self.rows_ready.emit()
 
     def _on_worker_finished(self) -> None:
-        self._workers = [(w, d) for w, d in self._workers if not d.is_set()]
+        self._workers = [job for job in self._workers if job.running]
 
     def _on_worker_error(self, error) -> None:
         self.measure_button.setEnabled(True)
@@ -428,24 +384,7 @@ class IlluminantsPage(QWidget):
         self._start_rows()
 
     def _update_plot(self, ids) -> None:
-        for source_id, curve in self._curves.items():
-            if source_id not in ids:
-                curve.hide()
-                self.legend.removeItem(curve)
-        for i, source_id in enumerate(ids):
-            illuminant = resolve_illuminant(source_id, self.library)
-            values = np.asarray(illuminant.sd.values, dtype=float)
-            peak = values.max()
-            curve = self._curves.get(source_id)
-            if curve is None:
-                curve = self.plot.plot(name=illuminant.name)
-                self._curves[source_id] = curve
-            else:
-                self.legend.removeItem(curve)
-                self.legend.addItem(curve, illuminant.name)
-            curve.setPen(pg.mkPen(_PLOT_COLOURS[i % len(_PLOT_COLOURS)], width=2))
-            curve.setData(illuminant.sd.wavelengths, values / peak if peak > 0 else values)
-            curve.show()
+        self.plot.show_sources([resolve_illuminant(i, self.library) for i in ids])
 
     def _update_swatches(self, ids) -> None:
         profile = self.workspace.profile
@@ -509,11 +448,10 @@ class IlluminantsPage(QWidget):
 
     def shutdown(self, timeout_s: float = 10.0) -> None:
         """Stop the workers and wait for them; unsubscribe from the workspace."""
-        for worker, _ in self._workers:
-            if hasattr(worker, "quit"):
-                worker.quit()
-        for _, done in self._workers:
-            done.wait(timeout_s)
+        for job in self._workers:
+            job.quit()
+        for job in self._workers:
+            job.wait(timeout_s)
         for unsubscribe in self._unsubscribe:
             try:
                 unsubscribe()
