@@ -294,6 +294,9 @@ class IlluminantsPage(QWidget):
         if self._skipped:
             text += f". Not shown ({len(self._skipped)}): " + "; ".join(self._skipped)
         self.status.setText(text)
+        selected = self.table.selectionModel().selectedRows()
+        if selected:
+            self.table.scrollTo(selected[-1])
         self.rows_ready.emit()
 
     def _on_worker_finished(self) -> None:
@@ -438,7 +441,7 @@ class IlluminantsPage(QWidget):
             self._sized = True
             width, height = self.width(), self.height()
             self.upper_splitter.setSizes([int(width * 0.6), int(width * 0.4)])
-            swatches = min(self.swatches.sizeHint().height() + 8, height // 2)
+            swatches = min(self.swatches.sizeHint().height() + 24, height // 2)
             self.splitter.setSizes([height - swatches, swatches])
 
     # -- teardown -------------------------------------------------------------------
