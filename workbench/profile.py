@@ -221,7 +221,7 @@ class Profile:
     lights: tuple[dict, ...] = ()
     level2: dict | None = None
     lut3d: dict | None = None
-    runtime: dict | None = None
+    runtime: dict | None = field(default_factory=lambda: {"colour_space": RUNTIME_COLOUR_SPACE})
     created: str = ""
     software: str = f"vr-colour-workbench {__version__}"
 
