@@ -43,6 +43,8 @@ def test_level2_view_shows_each_patch_at_its_level2_texture_value(page):
 def test_switching_the_source_relights_both_views_and_the_error_table(page, qtbot):
     assert page.source_id == "cie-d65"
     before = page.rendered_image()
+    actors = [r.GetActors().GetNumberOfItems() for r in page.plotter.renderers]
+    board_image = page._handles[2].board_image
     table_before = page.table.item(1, 0).text()
     summary_before = page.error_summary().summary[1].mean_abs
     # The two-peak metamer has D65's white: level 1 (light colour only) cannot
@@ -62,6 +64,9 @@ def test_switching_the_source_relights_both_views_and_the_error_table(page, qtbo
     for old, new in zip(_views(metamer), _views(warm)):
         assert np.abs(new.astype(int) - old).mean() > 3.0
     assert page.source_box.currentData() == "cie-a"
+    # Re-lit in place: the same meshes and texture images, only their pixels changed.
+    assert [r.GetActors().GetNumberOfItems() for r in page.plotter.renderers] == actors
+    assert page._handles[2].board_image is board_image
     column, row = page.patch_screen_point(2, 0)
     np.testing.assert_allclose(warm[row, column], page.level_images(2).patch_rgb8[0], atol=1)
 
