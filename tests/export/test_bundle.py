@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from tests.export.conftest import BUNDLE_LIGHTS
-from workbench.errors import InputError
+from workbench.errors import InputError, WorkbenchError
 from workbench.export import (
     RUNTIME_FILES,
     cube_accuracy,
@@ -176,7 +176,7 @@ def test_export_refuses_a_folder_that_is_not_a_bundle(tmp_path, vive_profile):
 def test_export_errors_name_the_input(tmp_path, vive_profile):
     with pytest.raises(InputError, match="2..129"):
         write_bundle(vive_profile, tmp_path / "b", light_ids=["cie-d65"], lut_size=1)
-    with pytest.raises(Exception, match="no-such-light"):
+    with pytest.raises(WorkbenchError, match="no-such-light"):
         write_bundle(vive_profile, tmp_path / "b", light_ids=["no-such-light"])
     assert not (tmp_path / "b").exists()
 
