@@ -71,17 +71,17 @@ def test_clean_session_extended_is_the_baseline():
 def test_real_lcd_ti3_files(name):
     diagnosis = diagnose(read_session(REAL / name))
     found = {f.effect for f in diagnosis.findings}
-    # well-behaved LCDs: a small black level is a finding; the ~1 % non-additivity is measured
-    # (within 2.5 standard errors of its size) but either within noise or moving the fixed
-    # colours by less than the materiality floor, so it is reported as checked, not named
-    assert found == {"black-offset"}
+    # well-behaved LCDs: a small black level is a finding (and the greys show channel curves a
+    # little off a power law); the ~1 % non-additivity is measured but either within noise or
+    # moving the fixed colours by less than the materiality floor: checked, not named
+    assert "black-offset" in found and found <= {"black-offset", "tone-curve-shape"}
     interaction = next(r for r in diagnosis.results if r.effect == "channel-interaction")
     assert 0.003 < abs(interaction.statistic) < 0.015
     assert not interaction.found
     assert not interaction.significant or interaction.impact_dE00 < 0.1
     assert "temporal-drift" not in found
     assert diagnosis.extended_score.n == 108
-    assert diagnosis.extended_score.mean_dE00 <= 0.55
+    assert diagnosis.extended_score.mean_dE00 <= 0.4
     assert diagnosis.extended_score.mean_dE00 < diagnosis.baseline_score.mean_dE00
     document = diagnosis.to_json()
     # DisplayCAL's first whites are copies of one measurement: left out of the noise

@@ -438,7 +438,8 @@ def _grey_points(context: DiagnosisContext):
     """(drive, per-channel outputs (n, 3), their standard deviations (n, 3)) from the greys, or None.
 
     Each grey's black-subtracted XYZ is solved for the three channel outputs
-    through the full-drive primaries (as the extension does); the outputs
+    through the full-drive primaries scaled so that they add up to the white
+    (white vs R + G + B is the interaction's test, not this one); the outputs
     carry the grey's relative luminance noise plus the floor over each
     primary's luminance.
     """
@@ -448,6 +449,8 @@ def _grey_points(context: DiagnosisContext):
     if greys.sum() < MIN_GREY_LEVELS:
         return None
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
+    if context.white_count:  # primaries scaled to add up to the white: the interaction's own test
+        matrix = matrix * np.linalg.solve(matrix, context.white - context.black)
     XYZ = context.fit.XYZ[greys]
     outputs = np.linalg.solve(matrix, (XYZ - context.black).T).T
     relative = context.noise.sd_Y(XYZ[:, 1]) / np.abs(XYZ[:, 1])

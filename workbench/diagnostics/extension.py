@@ -69,6 +69,10 @@ def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteract
     if interaction is not None:
         for _ in range(20):
             outputs = direct / interaction.channel_gains(outputs)
+    elif context.white_count:
+        # no interaction term: solve through primaries scaled to add up to the measured white,
+        # so a non-additivity too small to model is not read as a tone-curve shape
+        outputs = direct / np.linalg.solve(matrix, context.white - context.black)
     drive = context.fit.rgb[greys, 0] / 255.0
     return drive, outputs
 
@@ -87,12 +91,16 @@ DEFAULT_INTERACTION_EXPONENT = 2.0
 
 
 def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
-    """Per-channel co-drive gains: ``a_c`` from the white exactly, ``p`` from the greys.
+    """Per-channel co-drive gains: ``a_c`` from the white, ``p`` (and ``a_c``) from the greys.
 
-    ``W − K = Σ_c (1 − a_c) P_c`` in X, Y and Z gives the three ``a_c``; where
-    the fit rows hold at least five greys, ``p`` is the exponent of
-    :data:`INTERACTION_EXPONENTS` that predicts their XYZ best (relative
-    squared error) through power-law channel curves fitted on the sweeps.
+    Without greys, ``W − K = Σ_c (1 − a_c) P_c`` in X, Y and Z gives the three
+    ``a_c`` exactly and ``p`` is :data:`DEFAULT_INTERACTION_EXPONENT`. Where
+    the fit rows hold at least five greys above 10 % drive, ``a_c`` are the
+    least-squares solution over the white and the greys (relative error in
+    X, Y, Z; channel outputs from the sweeps: through their points where a
+    sweep has 8 levels or more, a power law otherwise) for each
+    ``p`` of :data:`INTERACTION_EXPONENTS`, and the ``p`` with the smallest
+    error is kept.
     """
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
     white = context.white - context.black
@@ -104,17 +112,28 @@ def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
     drive = context.fit.rgb[greys, 0] / 255.0
     keep = drive > 0.1
     if keep.sum() >= 5:
-        curves = [fit_tone_curve(*tone_data(s), "power") if s.drive.size >= 2 else None
+        curves = [None if s.drive.size < 2 else
+                  fit_tone_curve(*tone_data(s), "spline" if s.drive.size >= 8 else "power")
                   for s in context.sweeps]
         if all(c is not None for c in curves):
-            L = np.column_stack([c.forward(drive[keep]) for c in curves])
-            measured = context.fit.XYZ[greys][keep] - context.black
-            errors = []
+            # the white and the greys together, each in XYZ relative to its own Y:
+            # measured − K − Σ P_c L_c = −Σ_c a_c P_c L_c m^p, linear in a for each p
+            L = np.vstack([np.column_stack([c.forward(drive[keep]) for c in curves]),
+                           np.ones((1, 3))])
+            measured = np.vstack([context.fit.XYZ[greys][keep] - context.black, white])
+            weight = 1.0 / np.abs(measured[:, 1:2])
+            best = None
             for p in INTERACTION_EXPONENTS:
-                trial = ChannelInteraction(amount, amounts=tuple(amounts), exponent=p)
-                predicted = (L * trial.channel_gains(L)) @ matrix.T
-                errors.append(float(np.sum(((predicted - measured) / measured[:, 1:2]) ** 2)))
-            exponent = INTERACTION_EXPONENTS[int(np.argmin(errors))]
+                codrive = ((L.sum(axis=1) - L.max(axis=1)) / 2.0) ** p
+                design = -(L * codrive[:, None])[:, None, :] * matrix[None, :, :]  # (n, 3, 3)
+                residual = measured - L @ matrix.T
+                rows = (design * weight[:, :, None]).reshape(-1, 3)
+                target = (residual * weight).reshape(-1)
+                solution, *_ = np.linalg.lstsq(rows, target, rcond=None)
+                rss = float(np.sum((rows @ solution - target) ** 2))
+                if best is None or rss < best[0]:
+                    best = (rss, p, solution)
+            _, exponent, amounts = best
     return ChannelInteraction(amount=amount, amounts=tuple(float(a) for a in amounts),
                               exponent=float(exponent))
 
