@@ -55,6 +55,9 @@ def test_lights_json_is_the_level1_table(simulated_bundle, simulated_profile):
                                    atol=1e-8)
         assert light["XYZ"][1] == pytest.approx(
             simulated_profile.k * simulated_profile.display_model().white_XYZ[1], rel=1e-6)
+    # level 2 assumes the same engine light colour as level 1
+    level2 = json.loads((bundle / "level2" / "paint" / "lights.json").read_text())["lights"]
+    assert [light["light_rgb8"] for light in level2] == [light["rgb8"] for light in table["lights"]]
 
 
 def test_coefficient_file_is_ceil_c_over_4_rgba_half_layers(simulated_bundle):
