@@ -296,7 +296,7 @@ class IlluminantsPage(QWidget):
         self.status.setText(text)
         selected = self.table.selectionModel().selectedRows()
         if selected:
-            self.table.scrollTo(selected[-1])
+            self.table.scrollTo(selected[0], QAbstractItemView.ScrollHint.PositionAtCenter)
         self.rows_ready.emit()
 
     def _on_worker_finished(self) -> None:
