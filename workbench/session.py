@@ -31,6 +31,8 @@ from workbench.fileio import atomic_writer
 
 __all__ = [
     "SESSION_KINDS",
+    "NEGATIVE_TOLERANCE",
+    "check_measured_XYZ",
     "Session",
     "read_session_csv",
     "write_session_csv",
@@ -205,6 +207,28 @@ def _number(text: str, path, line: int, column: str) -> float:
     return value
 
 
+NEGATIVE_TOLERANCE = 0.001
+"""A measured X, Y or Z below ``−NEGATIVE_TOLERANCE × the session's largest Y`` is refused:
+instruments that subtract their dark reading give slightly negative values at black, never more."""
+
+
+def check_measured_XYZ(XYZ: np.ndarray, path, lines) -> None:
+    """Refuse tristimulus values no instrument can measure (clearly negative), naming the line."""
+    XYZ = np.asarray(XYZ, dtype=float).reshape(-1, 3)
+    if XYZ.size == 0:
+        return
+    limit = -NEGATIVE_TOLERANCE * max(float(np.max(XYZ[:, 1])), 0.0)
+    bad = np.flatnonzero(np.any(XYZ < limit, axis=1))
+    if bad.size:
+        i = int(bad[0])
+        raise SpectrumFileError(
+            path, lines[i] if lines is not None else None,
+            f"X, Y, Z = {', '.join(f'{v:g}' for v in XYZ[i])} is negative beyond noise (more "
+            f"than {100 * NEGATIVE_TOLERANCE:g} % of the session's brightest Y below zero)"
+            + (f"; {bad.size} such rows" if bad.size > 1 else ""),
+            "re-measure the patch or remove the row; light cannot be negative")
+
+
 def read_session_csv(path: str | os.PathLike) -> Session:
     """Read a session CSV (design §4). Errors name the file, the line and the fix."""
     path = Path(path)
@@ -233,6 +257,7 @@ def read_session_csv(path: str | os.PathLike) -> Session:
             raise SpectrumFileError(path, 1, f"the header has {surround_columns} but not all of sr,sg,sb",
                                     "give the surround as three columns sr,sg,sb (DAC 0..255) or none")
         kinds, rgb, XYZ, t_s, spectra, window, surround = [], [], [], [], [], [], []
+        data_lines: list[int] = []
         for line, row in enumerate(reader, start=2):
             if not row or all(not cell.strip() for cell in row):
                 continue
@@ -250,8 +275,14 @@ def read_session_csv(path: str | os.PathLike) -> Session:
             if any(v < 0 or v > 255 for v in dac):
                 raise SpectrumFileError(path, line, f"DAC values {dac} outside 0..255",
                                         "r,g,b are 8-bit DAC values 0..255")
+            if any(v != round(v) for v in dac):
+                raise SpectrumFileError(
+                    path, line, f"DAC values {[f'{v:g}' for v in dac]} are not whole numbers",
+                    "r,g,b are the 8-bit DAC values the panel received (0..255, integers); "
+                    "data on a 0-100 scale (an Argyll .ti3) should be read from the .ti3 itself")
             rgb.append(dac)
             XYZ.append([_number(row[columns[c]], path, line, c.upper()) for c in "xyz"])
+            data_lines.append(line)
             if "t_s" in columns:
                 t_s.append(_number(row[columns["t_s"]], path, line, "t_s"))
             if "window" in columns:
@@ -271,6 +302,7 @@ def read_session_csv(path: str | os.PathLike) -> Session:
     if not kinds:
         raise SpectrumFileError(path, None, "the file has a header but no measurements",
                                 "add one row per measured patch")
+    check_measured_XYZ(np.array(XYZ), path, data_lines)
     return Session(
         kind=np.array(kinds, dtype=object),
         rgb=np.array(rgb),

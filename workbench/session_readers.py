@@ -32,7 +32,7 @@ import colour
 import numpy as np
 
 from workbench.errors import SpectrumFileError
-from workbench.session import Session, read_session_csv
+from workbench.session import Session, check_measured_XYZ, read_session_csv
 
 __all__ = ["SESSION_READERS", "read_session", "read_ti3", "read_psychtoolbox_mat",
            "read_profile_primaries"]
@@ -76,6 +76,8 @@ def read_ti3(path) -> Session:
         elif state == "between":
             if text == "BEGIN_DATA":
                 state = "data"
+            elif text.startswith("NUMBER_OF_SETS"):
+                keywords["NUMBER_OF_SETS"] = text.split(None, 1)[-1].strip().strip('"')
         elif state == "data":
             if text == "END_DATA":
                 break
@@ -85,6 +87,13 @@ def read_ti3(path) -> Session:
     if not fields or not rows:
         raise SpectrumFileError(path, None, "no CGATS data table",
                                 "give an Argyll .ti3 with BEGIN_DATA_FORMAT/BEGIN_DATA sections")
+    declared = keywords.get("NUMBER_OF_SETS")
+    if declared is not None and declared.strip().isdigit() and int(declared) != len(rows):
+        raise SpectrumFileError(path, None, f"NUMBER_OF_SETS says {int(declared)} rows but the "
+                                f"first data table holds {len(rows)}",
+                                "the file is truncated or was edited: re-export it from "
+                                "DisplayCAL/Argyll, or correct NUMBER_OF_SETS if rows were "
+                                "removed on purpose")
     index = {name: i for i, name in enumerate(fields)}
     needed = ["RGB_R", "RGB_G", "RGB_B", "XYZ_X", "XYZ_Y", "XYZ_Z"]
     missing = [name for name in needed if name not in index]
@@ -106,6 +115,11 @@ def read_ti3(path) -> Session:
         absolute = [float(v) for v in re.split(r"[\s,]+", keywords["LUMINANCE_XYZ_CDM2"].strip())]
         if keywords.get("NORMALIZED_TO_Y_100", "NO").upper() == "YES":
             scale = absolute[1] / 100.0
+    if np.any(rgb < -1e-6) or np.any(rgb > 255 + 1e-6):
+        row = int(np.flatnonzero(np.any((rgb < -1e-6) | (rgb > 255 + 1e-6), axis=1))[0])
+        raise SpectrumFileError(path, row_lines[row], f"RGB {values[row, :3].tolist()} outside "
+                                "0..100", "a display .ti3 gives RGB_R/G/B in percent, 0..100")
+    check_measured_XYZ(XYZ, path, row_lines)
     kinds = np.array([_ti3_kind(v) for v in rgb], dtype=object)
     return Session(kind=kinds, rgb=np.clip(rgb, 0, 255), XYZ=XYZ * scale, source=str(path),
                    metadata={"format": "ti3", "instrument": keywords.get("TARGET_INSTRUMENT", ""),

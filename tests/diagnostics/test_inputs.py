@@ -1,0 +1,73 @@
+"""Inputs that cannot be right are refused by name, with the fix (issue 11, point 8)."""
+
+import re
+
+import numpy as np
+import pytest
+
+from workbench.errors import SpectrumFileError
+from workbench.session import read_session_csv, write_session_csv
+from workbench.session_readers import read_session
+from workbench.simulated_sessions import simulate_session
+
+
+@pytest.fixture(scope="module")
+def session_rows(tmp_path_factory):
+    path = tmp_path_factory.mktemp("inputs") / "session.csv"
+    write_session_csv(simulate_session(None, seed=2), path)
+    return path.read_text().splitlines()
+
+
+def _write(tmp_path, lines):
+    path = tmp_path / "edited.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _ramp_line(lines) -> int:
+    return next(i for i, line in enumerate(lines) if line.startswith("ramp-r,"))
+
+
+def test_a_negative_luminance_on_a_ramp_row_is_refused_with_its_line(tmp_path, session_rows):
+    lines = list(session_rows)
+    i = _ramp_line(lines)
+    cells = lines[i].split(",")
+    cells[5] = "-50"  # Y
+    lines[i] = ",".join(cells)
+    with pytest.raises(SpectrumFileError, match=rf"line {i + 1}: .*negative beyond noise"):
+        read_session_csv(_write(tmp_path, lines))
+
+
+def test_a_slightly_negative_black_from_a_dark_subtracting_instrument_is_read(tmp_path,
+                                                                               session_rows):
+    lines = list(session_rows)
+    i = next(i for i, line in enumerate(lines) if line.startswith("black,"))
+    cells = lines[i].split(",")
+    cells[4:7] = ["-0.001", "-0.002", "-0.001"]
+    lines[i] = ",".join(cells)
+    session = read_session_csv(_write(tmp_path, lines))
+    assert session.XYZ[i - 1, 1] == -0.002
+
+
+def test_fractional_dac_values_are_refused(tmp_path, session_rows):
+    lines = list(session_rows)
+    i = _ramp_line(lines)
+    cells = lines[i].split(",")
+    cells[1] = "12.5"
+    lines[i] = ",".join(cells)
+    with pytest.raises(SpectrumFileError, match=r"not whole numbers.*read from the \.ti3"):
+        read_session_csv(_write(tmp_path, lines))
+
+
+def test_a_ti3_whose_number_of_sets_disagrees_with_its_rows_is_refused(tmp_path):
+    from workbench.measurement.ti3 import write_session_ti3
+
+    path = write_session_ti3(simulate_session(None, seed=2), tmp_path / "session.ti3")
+    text = path.read_text()
+    count = int(re.search(r"NUMBER_OF_SETS\s+(\d+)", text).group(1))
+    edited = tmp_path / "edited.ti3"
+    edited.write_text(text.replace(f"NUMBER_OF_SETS {count}", f"NUMBER_OF_SETS {count + 3}", 1))
+    with pytest.raises(SpectrumFileError, match=rf"NUMBER_OF_SETS says {count + 3} rows but the "
+                                                rf"first data table holds {count}"):
+        read_session(edited)
+    assert len(read_session(path)) == count
