@@ -77,7 +77,7 @@ def test_bundle_readme_says_how_to_load_it_in_unity(simulated_bundle):
     bundle, _ = simulated_bundle
     text = (bundle / "README.md").read_text()
     assert "VrColourBundle.Load(" in text and "bundle.LightColour(" in text
-    assert "bundle.BindLevel2(" in text and "XR_COLOR_SPACE_UNMANAGED_FB" in text
+    assert "bundle.Relight(" in text and "XR_COLOR_SPACE_UNMANAGED_FB" in text
     assert "$" not in text.replace("$$", "")   # every template field filled
 
 

@@ -165,9 +165,9 @@ def test_glsl_shader_executed_reproduces_the_numpy_relight(request, which, gl, p
         assert np.mean(np.all(output[..., :3] == reference, axis=-1)) >= 0.99, light_id
 
 
-def _compile_hlsl(source: Path, spirv: Path, entry: str = "main") -> str:
+def _compile_hlsl(source: Path, spirv: Path, entry: str = "main", stage: str = "frag") -> str:
     need_tool("glslangValidator")
-    result = subprocess.run(["glslangValidator", "-D", "-V", "-S", "frag", "-e", entry,
+    result = subprocess.run(["glslangValidator", "-D", "-V", "-S", stage, "-e", entry,
                              str(source), "-o", str(spirv)], capture_output=True, text=True,
                             timeout=120)
     log = result.stdout + result.stderr
@@ -176,12 +176,22 @@ def _compile_hlsl(source: Path, spirv: Path, entry: str = "main") -> str:
     return log
 
 
-def test_hlsl_shader_compiles_to_valid_spirv(tmp_path):
-    spirv = tmp_path / "relight.spv"
-    _compile_hlsl(runtime_file("Level2Relight.hlsl"), spirv)
+@pytest.mark.parametrize("entry, stage", [("main", "frag"), ("VrFullScreenTriangle", "vert")])
+def test_hlsl_shader_compiles_to_valid_spirv(tmp_path, entry, stage):
+    spirv = tmp_path / f"relight-{stage}.spv"
+    _compile_hlsl(runtime_file("Level2Relight.hlsl"), spirv, entry, stage)
     need_tool("spirv-val")
     result = subprocess.run(["spirv-val", str(spirv)], capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_unity_shader_wraps_the_hlsl_entry_points():
+    text = runtime_file("VrLevel2Relight.shader").read_text()
+    hlsl = runtime_file("Level2Relight.hlsl").read_text()
+    assert '#include "Level2Relight.hlsl"' in text
+    for pragma, entry in (("vertex", "VrFullScreenTriangle"), ("fragment", "main")):
+        assert f"#pragma {pragma} {entry}" in text
+        assert f" {entry}(" in hlsl
 
 
 def test_a_wrong_entry_point_is_caught_although_the_compiler_exits_0(tmp_path):

@@ -67,7 +67,7 @@ __all__ = [
 BUNDLE_FORMAT = "vr-colour-workbench-bundle"
 BUNDLE_FORMAT_VERSION = 1
 
-RUNTIME_FILES = ("reference_consumer.py", "VrColourBundle.cs", "Level2Relight.hlsl",
+RUNTIME_FILES = ("reference_consumer.py", "VrColourBundle.cs", "Level2Relight.hlsl", "VrLevel2Relight.shader",
                  "level2_relight.frag", "level2_relight.vert")
 """Files of ``workbench/export/runtime/`` copied into every bundle's ``runtime/``."""
 

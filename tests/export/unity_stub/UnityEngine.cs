@@ -5,9 +5,12 @@ using System;
 
 namespace UnityEngine
 {
-    public enum TextureFormat { RGBAHalf = 17, RGBAFloat = 20, RFloat = 18 }
+    public enum TextureFormat { RGBA32 = 4, RGBAHalf = 17, RGBAFloat = 20, RFloat = 18 }
     public enum FilterMode { Point = 0, Bilinear = 1, Trilinear = 2 }
     public enum TextureWrapMode { Repeat = 0, Clamp = 1 }
+    public enum RenderTextureFormat { ARGB32 = 0 }
+    public enum RenderTextureReadWrite { Default = 0, Linear = 1, sRGB = 2 }
+    public enum MeshTopology { Triangles = 0 }
 
     public struct Color
     {
@@ -64,8 +67,24 @@ namespace UnityEngine
         public void Apply(bool updateMipmaps) { }
     }
 
+    public class RenderTexture : Texture
+    {
+        public RenderTexture(int width, int height, int depth, RenderTextureFormat format, RenderTextureReadWrite readWrite) { }
+        public static RenderTexture active { get; set; }
+        public bool Create() { return true; }
+        public void Release() { }
+    }
+
+    public static class Graphics
+    {
+        public static void SetRenderTarget(RenderTexture rt) { }
+        public static void DrawProceduralNow(MeshTopology topology, int vertexCount, int instanceCount = 1) { }
+        public static void CopyTexture(Texture src, Texture dst) { }
+    }
+
     public class Material : Object
     {
+        public bool SetPass(int pass) { return true; }
         public void SetTexture(string name, Texture value) { }
         public void SetVectorArray(string name, Vector4[] values) { }
         public void SetVector(string name, Vector4 value) { }

@@ -3,9 +3,10 @@
 // The same arithmetic as level2_relight.frag: render a full-screen pass into an
 // RGBA8 UNORM target of the cube's size (not sRGB: the texels are already
 // sRGB-encoded); alpha is 0 where the light cannot carry the texel, else 1.
-// Entry point: main (pixel shader). In Unity, include this file from a
-// ShaderLab pass (HLSLPROGRAM ... #pragma fragment main) or call
-// VrLevel2Relight from your own pass; VrColourBundle.BindLevel2 sets the inputs.
+// Entry points: VrFullScreenTriangle (vertex: a full-screen triangle from
+// SV_VertexID, draw 3 vertices, no mesh) and main (pixel). In Unity,
+// VrLevel2Relight.shader wraps them in a pass; VrColourBundle.BindLevel2 sets
+// the inputs and VrColourBundle.Relight draws the pass.
 #define MAX_LAYERS 16
 
 Texture2DArray<float4> _VrCoefficients : register(t0);   // RGBA16F, ceil(C / 4) layers
@@ -74,6 +75,12 @@ float4 VrLevel2Relight(int2 xy)
                           _VrTexelTable.Load(int3(dac.b, 2, 0)));
     bool unreachable = any(dac >= _VrUnreachableDac.xyz);
     return float4(value / 255.0, unreachable ? 0.0 : 1.0);
+}
+
+float4 VrFullScreenTriangle(uint id : SV_VertexID) : SV_Position
+{
+    float2 corner = float2((float)((id << 1) & 2), (float)(id & 2));
+    return float4(corner * 2.0 - 1.0, 0.0, 1.0);
 }
 
 float4 main(float4 position : SV_Position) : SV_Target

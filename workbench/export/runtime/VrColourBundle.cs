@@ -1,8 +1,12 @@
 // Unity loader of a VR colour workbench runtime bundle (C# 7.2; Unity 2020.1 or newer).
 //
 //   var bundle = VrColourBundle.Load(Path.Combine(Application.streamingAssetsPath, "headset"));
-//   sceneLight.color = bundle.LightColour("cie-d65");          // level 1
-//   bundle.BindLevel2(relightMaterial, "paintings", "cie-d65"); // level 2 (Level2Relight.hlsl)
+//   sceneLight.color = bundle.LightColour("cie-d65");                       // level 1
+//   albedo = bundle.Relight(relightMaterial, "paintings", "cie-d65", albedo); // level 2
+//
+// relightMaterial uses the shader "Hidden/VrColourWorkbench/Level2Relight"
+// (VrLevel2Relight.shader + Level2Relight.hlsl); the returned Texture2D is
+// sRGB (linear: false) and goes in the albedo slot of the object's material.
 //
 // Builds the Texture2DArray of a cube's coefficients (RGBAHalf), the display
 // inverse .cube as a Texture3D (RGBAFloat, bilinear = trilinear in 3D) for a
@@ -177,6 +181,26 @@ namespace VrColourWorkbench
             material.SetInt("_VrLayers", table.layers);
             material.SetInt("_VrCorrectionSize", CorrectionSize);
             material.SetVector("_VrUnreachableDac", new Vector4(light.unreachable_dac[0], light.unreachable_dac[1], light.unreachable_dac[2], 0f));
+        }
+
+        /// <summary>Level 2: relights a cube under a light into an sRGB Texture2D (created if null).</summary>
+        public Texture2D Relight(Material material, string cube, string lightId, Texture2D albedo)
+        {
+            BundleCube entry = FindCube(cube);
+            BindLevel2(material, cube, lightId);
+            var target = new RenderTexture(entry.width, entry.height, 0, RenderTextureFormat.ARGB32,
+                                           RenderTextureReadWrite.Linear);
+            target.Create();
+            RenderTexture previous = RenderTexture.active;
+            Graphics.SetRenderTarget(target);
+            material.SetPass(0);
+            Graphics.DrawProceduralNow(MeshTopology.Triangles, 3);
+            RenderTexture.active = previous;
+            if (albedo == null)
+                albedo = new Texture2D(entry.width, entry.height, TextureFormat.RGBA32, false, false);
+            Graphics.CopyTexture(target, albedo);  // the same bytes, now sampled as sRGB
+            target.Release();
+            return albedo;
         }
 
         BundleCube FindCube(string cube)
