@@ -33,12 +33,12 @@ def application() -> QApplication:
     return app
 
 
-def build_window(simulate: bool = False, settings=None):
-    """A :class:`~workbench.gui.main_window.MainWindow` over a new workspace."""
+def build_window(simulate: bool = False, settings=None, *, lazy: bool = False):
+    """A :class:`~workbench.gui.main_window.MainWindow` over a new workspace (``lazy``: see the window)."""
     from workbench.gui.main_window import MainWindow
     from workbench.workspace import Workspace
 
-    window = MainWindow(Workspace(), settings)
+    window = MainWindow(Workspace(), settings, lazy=lazy)
     form = window.pages["calibrate"].form
     if not simulate:
         form.instrument.setCurrentIndex(form.instrument.count() - 1)  # auto: the CS-2000 found by VID/PID
@@ -50,7 +50,7 @@ def run_gui(path: str | None = None, *, simulate: bool = False, screenshot_dir: 
     """Show the window (opening ``path`` if given) until it is closed; or, with ``screenshot_dir``,
     run a simulated calibration to the end, render every page to ``DIR/<page>.png`` and exit."""
     app = application()
-    window = build_window(simulate or screenshot_dir is not None)
+    window = build_window(simulate or screenshot_dir is not None, lazy=screenshot_dir is None)
     if screenshot_dir is not None:
         from workbench.gui.screenshots import save_screenshots
 

@@ -93,8 +93,23 @@ def XYZ_to_srgb8(XYZ, white_XYZ) -> np.ndarray:
     return np.round(255 * np.clip(np.nan_to_num(rgb), 0, 1)).astype(np.uint8)
 
 
+_SWEEP_CACHE: dict = {}
+
+
 def sweep_views(diagnosis) -> tuple:
-    """Per channel: measured points with the baseline power law and the extended curve, and residuals."""
+    """Per channel: measured points with the baseline power law and the extended curve, and residuals.
+
+    The views of the latest diagnosis asked for are kept: the page and the cards ask more than once.
+    """
+    cached = _SWEEP_CACHE.get("views")
+    if cached is not None and cached[0] is diagnosis:
+        return cached[1]
+    views = _sweep_views(diagnosis)
+    _SWEEP_CACHE["views"] = (diagnosis, views)
+    return views
+
+
+def _sweep_views(diagnosis) -> tuple:
     raw_sweeps = channel_sweeps(diagnosis.context.raw, np.zeros(3))
     extended = diagnosis.extended
     views = []

@@ -16,7 +16,7 @@ import importlib
 import logging
 from pathlib import Path
 
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (
     QButtonGroup,
@@ -93,6 +93,10 @@ class MainWindow(QMainWindow):
     workspace : Workspace
     settings : WindowSettings, optional
         Where recent files and the layout are kept (tests give a temporary one).
+    lazy : bool
+        Build only the Calibrate page before the window first paints; the
+        others are built one per event-loop turn after it (or at once when
+        shown), so that the window appears quickly.
 
     Signals
     -------
@@ -105,21 +109,28 @@ class MainWindow(QMainWindow):
     file_loaded = Signal(object)
     error = Signal(str)
 
-    def __init__(self, workspace, settings: WindowSettings | None = None, parent=None):
+    def __init__(self, workspace, settings: WindowSettings | None = None, parent=None, *, lazy: bool = False):
         super().__init__(parent)
         self.workspace = workspace
         self.settings = settings or WindowSettings()
         self.setObjectName("workbench-main-window")
         self.pages: dict = {}
+        self._pending: dict = {}
         self._loaders: list = []
         self.stack = QStackedWidget()
         self.flow = QButtonGroup(self)
         flow_bar = QHBoxLayout()
         flow_bar.setContentsMargins(8, 6, 8, 2)
         for i, (key, module, name, title) in enumerate(PAGES):
-            page = _make_page(module, name, title, workspace)
-            self.pages[key] = page
-            self.stack.addWidget(page)
+            if lazy and key != "calibrate":
+                placeholder = QLabel(f"loading {title}…")
+                placeholder.setAlignment(Qt.AlignmentFlag.AlignCenter)
+                self._pending[key] = placeholder
+                self.stack.addWidget(placeholder)
+            else:
+                page = _make_page(module, name, title, workspace)
+                self.pages[key] = page
+                self.stack.addWidget(page)
             if i:
                 arrow = QLabel("→")
                 arrow.setStyleSheet("color:#888;font-size:14px")
@@ -133,7 +144,7 @@ class MainWindow(QMainWindow):
             self.flow.addButton(button, i)
             flow_bar.addWidget(button)
         flow_bar.addStretch(1)
-        self.flow.idClicked.connect(self.stack.setCurrentIndex)
+        self.flow.idClicked.connect(lambda i: self.show_page(PAGES[i][0]))
         self.stack.currentChanged.connect(lambda i: self.flow.button(i).setChecked(True))
         self.flow.button(0).setChecked(True)
         central = QWidget()
@@ -196,7 +207,7 @@ class MainWindow(QMainWindow):
         self._action(calibration, "&Cancel", calibrate.cancel, "Ctrl+.")
         view = menus.addMenu("&View")
         for i, (key, module, name, title) in enumerate(PAGES):
-            self._action(view, f"{i + 1} {title}", lambda checked=False, i=i: self.stack.setCurrentIndex(i),
+            self._action(view, f"{i + 1} {title}", lambda checked=False, key=key: self.show_page(key),
                          f"Ctrl+{i + 1}")
         view.addSeparator()
         toggle = self.log_dock.toggleViewAction()
@@ -220,15 +231,45 @@ class MainWindow(QMainWindow):
         box.open()
 
     # -- pages ------------------------------------------------------------------------------
+    def page(self, key: str):
+        """The page ``key``, built now if it was still pending."""
+        if key in self._pending:
+            index = [k for k, *_ in PAGES].index(key)
+            _, module, name, title = PAGES[index]
+            placeholder = self._pending.pop(key)
+            page = _make_page(module, name, title, self.workspace)
+            current = self.stack.currentIndex()
+            self.stack.insertWidget(index, page)
+            self.stack.removeWidget(placeholder)
+            placeholder.deleteLater()
+            self.stack.setCurrentIndex(current)
+            self.pages[key] = page
+        return self.pages[key]
+
+    def build_pending_pages(self) -> None:
+        """Build every page still pending (lazy windows build them one per event-loop turn anyway)."""
+        for key in list(self._pending):
+            self.page(key)
+
+    def _build_next_page(self) -> None:
+        if self._pending and not getattr(self, "_shut_down", False):
+            self.page(next(iter(self._pending)))
+            QTimer.singleShot(0, self._build_next_page)
+
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt's name
+        super().showEvent(event)
+        if self._pending:
+            QTimer.singleShot(0, self._build_next_page)
+
     def show_page(self, key: str) -> None:
-        self.stack.setCurrentWidget(self.pages[key])
+        self.stack.setCurrentWidget(self.page(key))
 
     def current_page_key(self) -> str:
-        return next(k for k, p in self.pages.items() if p is self.stack.currentWidget())
+        return PAGES[self.stack.currentIndex()][0]
 
     def _export(self) -> None:
         self.show_page("export")
-        self.pages["export"].export()
+        self.page("export").export()
 
     # -- files -------------------------------------------------------------------------------
     def _open_dialog(self) -> None:

@@ -86,6 +86,8 @@ def save_screenshots(window, directory: Path, *, path=None, time_scale: float | 
             for _ in range(5):
                 QApplication.processEvents()
             page = window.pages[key]
+            if callable(getattr(page, "finish_drawing", None)):
+                page.finish_drawing()
             if key == "export" and callable(getattr(page, "export", None)):
                 page.export()  # into the temporary session directory: the page shows what it wrote
                 QApplication.processEvents()

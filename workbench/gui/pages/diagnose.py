@@ -14,7 +14,7 @@ import html
 import tempfile
 from pathlib import Path
 
-from PySide6.QtCore import QUrl, Qt
+from PySide6.QtCore import QTimer, QUrl, Qt
 from PySide6.QtGui import QDesktopServices
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QPushButton, QSplitter, QTextBrowser, QVBoxLayout, QWidget
 
@@ -44,6 +44,8 @@ class DiagnosePage(QWidget):
         self.report_button.setToolTip("write the HTML report of this diagnosis and open it in the browser")
         self.report_button.clicked.connect(self.open_report)
         self.report_path: Path | None = None
+        self._stages: list = []
+        self._staged = None
         self.cards = FindingCards()
         self.fits = FitPlots()
         self.table = ValidationTable()
@@ -79,10 +81,22 @@ class DiagnosePage(QWidget):
             self.summary.setText("<br>".join(f"<b>{key}</b>: {text}" for key, text in views.summary_lines(diagnosis)))
             self.details.setHtml("<br>".join(f"<b>{key}</b>: {html.escape(text)}"
                                              for key, text in views.detail_lines(diagnosis)))
-        self.cards.show_diagnosis(diagnosis)
-        self.fits.show_diagnosis(diagnosis)
-        self.table.show_diagnosis(diagnosis)
-        self.histogram.show_diagnosis(diagnosis)
+        # One part per event-loop turn, so that the window keeps responding while they are drawn.
+        self._stages = [self.table.show_diagnosis, self.histogram.show_diagnosis, self.fits.show_sweeps,
+                        self.fits.show_others, self.cards.show_diagnosis]
+        self._staged = diagnosis
+        self._next_stage()
+
+    def _next_stage(self) -> None:
+        if self._stages:
+            self._stages.pop(0)(self._staged)
+            if self._stages:
+                QTimer.singleShot(0, self._next_stage)
+
+    def finish_drawing(self) -> None:
+        """Draw every part still waiting for its event-loop turn (tests, screenshots)."""
+        while self._stages:
+            self._stages.pop(0)(self._staged)
 
     def write_report(self, path=None) -> Path:
         """Write the HTML report of the current diagnosis (a temporary file by default)."""

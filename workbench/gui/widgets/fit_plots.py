@@ -36,6 +36,11 @@ class FitPlots(QWidget):
 
     def show_diagnosis(self, diagnosis) -> None:
         """Plot ``diagnosis`` (None: empty plots that say why)."""
+        self.show_sweeps(diagnosis)
+        self.show_others(diagnosis)
+
+    def show_sweeps(self, diagnosis) -> None:
+        """The sweep fits and residuals."""
         if diagnosis is None:
             for plot in self.plots():
                 plot.show_view(None, "open a session or calibrate")
@@ -43,6 +48,11 @@ class FitPlots(QWidget):
         for c, sweep in enumerate(views.sweep_views(diagnosis)):
             self.fits[c].show_view(sweep.fit)
             self.residuals[c].show_view(sweep.residuals)
+
+    def show_others(self, diagnosis) -> None:
+        """Additivity, greys, chromaticity and white references."""
+        if diagnosis is None:
+            return
         self.additivity.show_view(views.additivity_view(diagnosis))
         greys = views.grey_additivity_view(diagnosis)
         self.greys.setVisible(greys is not None)
