@@ -217,15 +217,19 @@ def diagnose(session: Session) -> Diagnosis:
     else:
         baseline = GammaMatrixDisplay.fit(fit_session)
     context, results = run_detectors(fit_session)
-    results = _materiality(context, results, baseline)
+    tone_forms = None
+    if any(r.effect == "tone-curve-shape" and r.significant for r in results):
+        # the forms are chosen once, by BIC on the fit rows; every later fit refits them
+        tone_forms = _tone_forms(fit_extended(context, ["tone-curve-shape"], baseline))
+    results = _materiality(context, results, baseline, tone_forms)
     found = [r.effect for r in results if r.found]
     if "temporal-drift" not in found and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise)
     terms, cross_validation = select_terms(context, found, baseline,
-                                           {r.effect: r.impact_dE00 for r in results})
+                                           {r.effect: r.impact_dE00 for r in results}, tone_forms)
     if terms and "temporal-drift" not in terms and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise)
-    extended = (fit_extended(context, terms, baseline, cross_validation.get("tone_forms"))
+    extended = (fit_extended(context, terms, baseline, tone_forms)
                 if cross_validation.get("use_extension") else baseline)
     results = tuple(replace(r, in_model=r.effect in terms and extended is not baseline,
                             cross_validation=cross_validation["by_effect"].get(r.effect, ""))
@@ -235,7 +239,7 @@ def diagnose(session: Session) -> Diagnosis:
     if len(validation):
         baseline_dE = delta_E2000(baseline.forward(validation.rgb), validation.XYZ, white)
         extended_dE = _score_extended(extended, context, in_model, validation, white)
-        attribution = _attribution(context, in_model, baseline, validation, white)
+        attribution = _attribution(context, in_model, baseline, validation, white, tone_forms)
     else:
         baseline_dE = extended_dE = np.zeros(0)
         attribution = None
@@ -251,12 +255,13 @@ def diagnose(session: Session) -> Diagnosis:
                      unexplained=unexplained, cross_validation=cross_validation)
 
 
-def _materiality(context: DiagnosisContext, results, baseline) -> tuple[DetectorResult, ...]:
+def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None
+                 ) -> tuple[DetectorResult, ...]:
     """Each significant effect's impact on :data:`FIXED_COLOURS`; found = significant and material."""
     significant = [r.effect for r in results if r.significant]
     if not significant:
         return results
-    full = fit_extended(context, significant, baseline)
+    full = fit_extended(context, significant, baseline, tone_forms)
     white = context.white
     predicted = full.forward(FIXED_COLOURS)
     out = []
@@ -270,7 +275,7 @@ def _materiality(context: DiagnosisContext, results, baseline) -> tuple[Detector
                                                 white)
         else:
             without = fit_extended(context, [e for e in significant if e != result.effect],
-                                   baseline, _tone_forms(full))
+                                   baseline, tone_forms)
             impact = mean_dE00_on_fixed_colours(predicted, without.forward(FIXED_COLOURS), white)
         out.append(replace(result, impact_dE00=impact,
                            found=bool(impact >= MATERIALITY_FLOOR_DE00)))
@@ -288,7 +293,8 @@ def _score_extended(model, context: DiagnosisContext, found, validation: Session
     return delta_E2000(predicted, validation.XYZ, white)
 
 
-def _attribution(context: DiagnosisContext, found, baseline, validation: Session, white):
+def _attribution(context: DiagnosisContext, found, baseline, validation: Session, white,
+                 tone_forms=None):
     """What each term buys on the validation colours: the extension refitted without it.
 
     Also the extension refitted with no term at all (same rows, same fitting as
@@ -304,7 +310,7 @@ def _attribution(context: DiagnosisContext, found, baseline, validation: Session
             rebuilt = build_context(context.raw, drift_found=False, noise=context.noise)
         else:
             rebuilt = context
-        model = fit_extended(rebuilt, effects, baseline)
+        model = fit_extended(rebuilt, effects, baseline, tone_forms)
         return float(np.mean(_score_extended(model, rebuilt, effects, validation, white)))
 
     return {
@@ -356,10 +362,12 @@ def _residual_lut_fallback(model, session: Session, context, found, white):
     else:
         folds = np.random.default_rng(0).permutation(len(validation)) % FALLBACK_FOLDS
         predicted = np.zeros_like(target)
+        smoothing = None  # chosen by the LUT's inner cross-validation on the first fold's rows
         for k in range(FALLBACK_FOLDS):
             train = folds != k
             fitted = fit_residual_lut(model, np.vstack([fit.rgb, validation.rgb[train]]),
-                                      np.vstack([fit.XYZ, target[train]]))
+                                      np.vstack([fit.XYZ, target[train]]), smoothing=smoothing)
+            smoothing = fitted.smoothing
             predicted[~train] = fitted.forward(validation.rgb[~train])
         protocol = (f"{FALLBACK_FOLDS}-fold cross-validation on the validation colours: the fit "
                     f"rows hold only {n_mixtures} mixtures, so each fold's LUT also learns from "

@@ -29,6 +29,7 @@ __all__ = ["ResidualLUTDisplay", "SMOOTHING_CHOICES", "fit_residual_lut"]
 class ResidualLUTDisplay(DisplayModel):
     base: DisplayModel
     lut: np.ndarray  # (n, n, n, 3) residual XYZ at the grid nodes
+    smoothing: float | None = None  # the RBF smoothing per point it was fitted with (not saved)
 
     model_id = "lut3d-residual"
 
@@ -125,4 +126,5 @@ def fit_residual_lut(base: DisplayModel, rgb, XYZ, *, size: int = 9,
                             smoothing=smoothing * len(rgb))
     nodes = np.linspace(0.0, 1.0, size)
     grid = np.stack(np.meshgrid(nodes, nodes, nodes, indexing="ij"), axis=-1).reshape(-1, 3)
-    return ResidualLUTDisplay(base=base, lut=field(grid).reshape(size, size, size, 3))
+    return ResidualLUTDisplay(base=base, lut=field(grid).reshape(size, size, size, 3),
+                              smoothing=float(smoothing))

@@ -128,10 +128,15 @@ class PowerCurve(ToneCurve):
 
     @classmethod
     def fit(cls, drive, output):
+        """Weighted least squares in ``γ`` on [0.2, 8] (one dimension: bounded Brent search)."""
+        from scipy.optimize import minimize_scalar
+
         w = _weights(output)
-        result = least_squares(lambda p: (drive ** p[0] - output) * w, x0=[2.2],
-                               bounds=([0.2], [8.0]))
-        return cls(float(result.x[0]))
+        drive = np.asarray(drive, dtype=float)
+        result = minimize_scalar(lambda g: float(np.sum(((drive ** g - output) * w) ** 2)),
+                                 bounds=(0.2, 8.0), method="bounded",
+                                 options={"xatol": 1e-7})
+        return cls(float(result.x))
 
 
 @dataclass(frozen=True)
