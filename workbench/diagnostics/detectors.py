@@ -9,8 +9,10 @@ paper's model holds for this effect":
     χ² of the distinct white references (copies left out) about their mean,
     ``n − 1`` degrees of freedom, as an F-test against the noise estimate's
     own degrees of freedom; with six or more references it must also hold
-    without the most deviant interior one (one bad reading is not a drift;
-    the first and last are kept, where a warm-up or a decline shows first); against session time, or against row order
+    without the most deviant one when that one is less than
+    :data:`OUTLIER_SIGMA` standard deviations off (one bad reading is not a
+    drift; a reference far beyond that, such as the first one of a warm-up,
+    is a real change); against session time, or against row order
     where the session has no times (a ``.ti3``: its rows are in measurement
     order), and the evidence says which. Statistic: the span of the
     references. The form is named: warm-up, decline, step or wander.
@@ -88,6 +90,10 @@ __all__ = [
 ]
 
 CHANNEL_NAMES = ("red", "green", "blue")
+OUTLIER_SIGMA = 8.0
+"""A single white reference closer than this (in σ) to the others' median may be a bad reading:
+instrument readings have heavier tails than a Gaussian (a Student t), but not this heavy."""
+
 MIN_TONE_LEVELS = 5
 """A channel's shape is tested only with this many sweep levels below full drive."""
 
@@ -237,11 +243,13 @@ def detect_temporal_drift_raw(drift: DriftCorrection | None, time_basis: str,
     chi2 = steady_chi2(everything)
     dof = Y.size - 1
     p = f_sf(chi2 / dof, dof, noise.dof)  # the noise is estimated: F, not χ²
-    if Y.size >= 6:  # one bad reading is not a drift: it must show without the worst one too
-        deviation = np.abs(Y - np.median(Y)) / sd
-        deviation[[0, -1]] = -np.inf  # a warm-up or a decline shows first at the ends
+    deviation = np.abs(Y - np.median(Y)) / sd
+    worst = int(np.argmax(deviation))
+    if Y.size >= 6 and deviation[worst] < OUTLIER_SIGMA:
+        # one reading a few σ off could be a bad reading, not a drift: the drift must show
+        # without it too (a reference far beyond that is a real change, e.g. a warm-up)
         without = everything.copy()
-        without[int(np.argmax(deviation))] = False
+        without[worst] = False
         p = max(p, f_sf(steady_chi2(without) / (dof - 1), dof - 1, noise.dof))
     relative_sd = float(np.median(sd / Y))
     form = _drift_form(drift, relative_sd)
