@@ -29,7 +29,7 @@ def test_separable_models_need_no_correction_and_match_their_inverse(request, wh
 def test_channel_interaction_is_carried_by_the_correction_table(simulated_profile):
     display = simulated_profile.display_model()
     inverse = runtime_display_inverse(display)
-    assert inverse.correction is not None and inverse.correction.shape == (49, 49, 49, 3)
+    assert inverse.correction is not None and inverse.correction.shape == (61, 61, 61, 3)
     XYZ = _random_colours(display)
     exact = display.inverse_rgb8(XYZ)
     with_table = inverse.dac(XYZ)

@@ -46,8 +46,12 @@ __all__ = [
 UNREACHED_THRESHOLD = 2.0
 """Threshold of a DAC level the display never reaches (``u`` never exceeds 1; JSON has no inf)."""
 
-DEFAULT_CORRECTION_SIZE = 49
-"""Nodes per axis of the drive-correction table (spacing 1/32 of the drive range)."""
+DEFAULT_CORRECTION_SIZE = 61
+"""Nodes per axis of the drive-correction table: spacing 1/40 of the drive range, with nodes
+on drive 0 and 1 exactly (where the clipping kinks are), 2.7 MB as float32. Measured on the
+simulated headset (per-channel co-drive interaction + black), integer DAC equal to the
+model's own inverse on 99.74 % of random colours (49 nodes: 99.59 %; 57, whose nodes miss
+0 and 1: 98.68 %; 73: 99.80 %)."""
 
 CORRECTION_DOMAIN = (-0.25, 1.25)
 """Affine-drive range the correction table covers, per channel."""
@@ -216,6 +220,7 @@ def runtime_display_inverse(display: DisplayModel, *, correction_size: int = DEF
     """
     if correction_size < 2:
         raise InputError(f"correction_size={correction_size}: need at least 2 nodes per axis")
+    # (correction_size - 1) a multiple of 6 puts nodes on drive 0 and 1 of CORRECTION_DOMAIN
     matrix, offset = _affine_part(display)
     thresholds = _channel_thresholds(display)
     correction = None
