@@ -27,7 +27,12 @@ K and S are chosen per cube (:func:`choose_cube_basis`, fewest channels C
 first) so that this runtime arithmetic gives **the same 8-bit texel** as the
 full-band level-2 path (:func:`workbench.hyperspectral.relight_level2_full_band`)
 on at least ``target_share`` of held-out texels (texels the basis was not
-fitted on), under every light of the bundle.
+fitted on) and ``probe_share`` of the library's materials and their mixtures
+(:func:`probe_reflectances`: a cube's held-out texels mix the materials the
+basis was fitted on, the probe guards against others), under every light of
+the bundle.
+
+Scale: reflectance 0..1; drive 0..1; DAC and texels 8-bit integers.
 """
 
 from __future__ import annotations
