@@ -8,7 +8,10 @@ primaries stay in every training set (no model can be fitted without them),
 and so do copies. Each fold's model is refitted on the other folds, drift
 correction included (its references are the training whites), and predicts
 the fold's rows; the score is the mean CIEDE2000 of those predictions
-(CIELAB white: the session's measured white).
+(CIELAB white: the session's measured white) per group of rows — sweep
+points, greys, white references, other mixtures — averaged over the groups,
+so each kind of evidence counts the same however many rows the plan spends
+on it (the paper's plan has 153 sweep points and 10 whites).
 
 Selection (:func:`select_terms`): start from every found effect; remove,
 one at a time from the least material, each term whose removal does not make
@@ -52,7 +55,7 @@ def cross_validated_dE00(context: DiagnosisContext, effects, baseline=None, tone
     session = context.raw
     fold = fold_of_rows(context, folds)
     white = context.white if context.white_count else None
-    errors = []
+    errors, groups = [], []
     drift = effects is not None and "temporal-drift" in effects
     for k in range(folds):
         test = fold == k
@@ -74,7 +77,19 @@ def cross_validated_dE00(context: DiagnosisContext, effects, baseline=None, tone
             return float("inf")
         reference = white if white is not None else context.white
         errors.append(delta_E2000(predicted, held.XYZ, reference))
-    return float(np.mean(np.concatenate(errors))) if errors else float("inf")
+        groups.append(_group_of_rows(held.rgb))
+    if not errors:
+        return float("inf")
+    errors, groups = np.concatenate(errors), np.concatenate(groups)
+    return float(np.mean([errors[groups == g].mean() for g in np.unique(groups)]))
+
+
+def _group_of_rows(rgb: np.ndarray) -> np.ndarray:
+    """0 single-channel sweep points, 1 greys, 2 whites, 3 other mixtures."""
+    lit = (rgb > 0).sum(axis=1)
+    grey = (rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2])
+    white = np.all(rgb >= 255, axis=1)
+    return np.select([lit == 1, white, grey], [0, 2, 1], default=3)
 
 
 def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_forms=None

@@ -219,8 +219,10 @@ def diagnose(session: Session) -> Diagnosis:
     context, results = run_detectors(fit_session)
     tone_forms = None
     if any(r.effect == "tone-curve-shape" and r.significant for r in results):
-        # the forms are chosen once, by BIC on the fit rows; every later fit refits them
-        tone_forms = _tone_forms(fit_extended(context, ["tone-curve-shape"], baseline))
+        # the forms are chosen once, by BIC on the fit rows (with every significant term, so
+        # grey-derived points are read through them); every later fit refits these forms
+        tone_forms = _tone_forms(fit_extended(context, [r.effect for r in results
+                                                        if r.significant], baseline))
     results = _materiality(context, results, baseline, tone_forms)
     found = [r.effect for r in results if r.found]
     if "temporal-drift" not in found and context.drift_found:
