@@ -1,7 +1,8 @@
 """A self-contained HTML report of a diagnosis (plots embedded as PNG data URIs).
 
-Sections: the verdict (baseline vs extended on held-out colours), the findings
-with their evidence, sweep fits and residuals per channel, the additivity
+Sections: the verdict (baseline vs extended on held-out colours), the
+session's noise model, the findings with their statistic, standard error, z
+and impact, what was checked and not found, what could not be tested, sweep fits and residuals per channel, the additivity
 chart, chromaticity vs level, the white references vs time, and the CIEDE2000
 histograms before and after. Plots use matplotlib's Agg canvas directly (no
 GUI backend, no global state).
@@ -102,8 +103,9 @@ def _drift_figure(diagnosis: Diagnosis) -> Figure | None:
         return None
     figure = Figure(figsize=(5, 3.2), layout="constrained")
     axis = figure.subplots()
-    axis.plot(drift.times / 60, 100 * drift.gains, "o-", color="#444")
-    axis.set_xlabel("session time, min")
+    by_rows = diagnosis.context.time_basis == "row order"
+    axis.plot(drift.times if by_rows else drift.times / 60, 100 * drift.gains, "o-", color="#444")
+    axis.set_xlabel("row (no times: row order)" if by_rows else "session time, min")
     axis.set_ylabel("white Y, % of final")
     axis.set_title("white references vs time")
     return figure
@@ -135,14 +137,28 @@ def render_report(diagnosis: Diagnosis) -> str:
     """The report as one HTML string."""
     findings = diagnosis.findings
     terms = {t["effect"]: t for t in diagnosis.to_json()["extended"]["terms"]}
+    def model_note(f) -> str:
+        if f.effect in terms:
+            return (f"extended with {html.escape(terms[f.effect]['term'])}, fitted on "
+                    f"{html.escape(terms[f.effect]['fitted_on'])}")
+        return html.escape(f.cross_validation or "reported only: it names no model term")
+
     items = "".join(
-        f"<li><b>{html.escape(f.effect)}</b> (score {f.score:.1f}): {html.escape(f.evidence)}"
-        f"<br><small>extended with {html.escape(terms[f.effect]['term'])}, fitted on "
-        f"{html.escape(terms[f.effect]['fitted_on'])}</small></li>"
+        f"<li><b>{html.escape(f.effect)}</b> (statistic {f.statistic:.4g} ± "
+        f"{f.standard_error:.2g}, z {f.z:.1f} against {f.critical_z:.2f}, impact "
+        f"{f.impact_dE00:.2f} ΔE00; score {f.score:.1f}): {html.escape(f.evidence)}"
+        f"<br><small>{model_note(f)}</small></li>"
         for f in findings) or "<li>None beyond noise: the paper's model is adequate.</li>"
     not_found = "".join(
-        f"<li>{html.escape(r.effect)} (statistic {r.statistic:.4g}, threshold {r.threshold:.4g}): "
-        f"{html.escape(r.evidence)}</li>" for r in diagnosis.results if not r.found)
+        f"<li>{html.escape(r.effect)} (statistic {r.statistic:.4g} ± {r.standard_error:.2g}, "
+        f"z {r.z:.1f} against {r.critical_z:.2f}"
+        + (f", impact {r.impact_dE00:.3f} ΔE00 below the floor" if r.impact_dE00 is not None
+           else "") + f"): {html.escape(r.evidence)}</li>"
+        for r in diagnosis.results if not r.found and r.testable)
+    untested = "".join(f"<li>{html.escape(effect)}: {html.escape(why)}</li>"
+                       for effect, why in diagnosis.untested)
+    document = diagnosis.to_json()
+    significance = document["significance"]
     gain = diagnosis.gain_pct
     figures = [("Sweep fits and residuals", _sweep_figure(diagnosis)),
                ("Additivity", _additivity_figure(diagnosis)),
@@ -166,8 +182,15 @@ img{{max-width:100%}}.gain{{font-size:1.3em}}</style></head><body>
 {_score_row("extended", diagnosis.extended.describe(), diagnosis.extended_score)}</table>
 <p class="gain">{"" if gain is None else f"Mean ΔE00 reduced by <b>{gain:.0f} %</b> on held-out colours."}</p>
 <p>CIEDE2000 in CIELAB whose white is the measured display white.</p>
+<h2>Noise</h2><p>{html.escape(document["noise"]["summary"])}.</p>
+<p>A finding needs z above the family-wise critical value ({100 * significance["family_alpha"]:.0f} %
+chance of any false finding in a clean session, {html.escape(significance["method"])}) and an
+impact of at least {significance["materiality_floor_dE00"]:g} mean ΔE00 on a
+{html.escape(significance["materiality_colours"])}; a term enters the model only where it
+improves a {diagnosis.cross_validation.get("folds", 5)}-fold cross-validated prediction of the fit rows.</p>
 <h2>Findings</h2><ol>{items}</ol>
 <h3>Checked, not found</h3><ul>{not_found or "<li>—</li>"}</ul>
+<h3>Not tested</h3><ul>{untested or "<li>—</li>"}</ul>
 {images}
 <p><small>vr-colour-workbench {__version__}</small></p></body></html>
 """
