@@ -14,7 +14,7 @@ from __future__ import annotations
 import threading
 
 import numpy as np
-from PySide6.QtCore import QPoint, Qt, Signal
+from PySide6.QtCore import QPoint, Qt, QTimer, Signal
 from PySide6.QtGui import QColor, QImage, QPainter
 from PySide6.QtWidgets import (
     QComboBox,
@@ -31,13 +31,25 @@ from PySide6.QtWidgets import (
 from workbench.errors import WorkbenchError
 from workbench.illuminants.user_library import resolve_illuminant
 from workbench.scene import LEVELS, level_images, patch_errors, scene_content
-from workbench.scene.booth import board_patch_world_point, booth_camera, build_booth, relight_booth
 
 __all__ = ["ScenePage"]
 
 _ROWS = ("Level 2 shows", "Level 1 ΔE00", "Level 2 ΔE00", "L1 |ΔR ΔG ΔB|", "L2 |ΔR ΔG ΔB|",
          "DAC_t (R G B)")
 """Rows of the error table; its columns are the 24 patches."""
+
+WARM_UP_DELAY_MS = 1500
+"""How long after the page is made the warm-up thread starts (after the window's first paint)."""
+
+
+def _warm_up() -> None:
+    """Import VTK, pyvista and pyvistaqt and prepare the booth's surfaces (no VTK object, no widget)."""
+    import pyvistaqt  # noqa: F401 - the import is the work
+
+    import workbench.scene.booth  # noqa: F401
+
+    scene_content()
+
 
 _VIEW_TITLES = {1: "Level 1: authored textures, light colour set",
                 2: "Level 2: textures re-authored for the source"}
@@ -57,8 +69,6 @@ class ScenePage(QWidget):
 
     def __init__(self, workspace, parent=None):
         super().__init__(parent)
-        from pyvistaqt import QtInteractor
-
         self.workspace = workspace
         self._source_id = workspace.selected_sources[0]
         self._images: dict[int, object] = {}
@@ -70,18 +80,19 @@ class ScenePage(QWidget):
         self.caption = QLabel()
         self.caption.setWordWrap(True)
 
-        # multi_samples=1 and no FXAA: anti-aliasing off on purpose (module doc).
-        self.plotter = QtInteractor(self, shape=(1, 2), multi_samples=1, auto_update=False,
-                                    border=False)
-        self.plotter.disable_anti_aliasing(all_renderers=True)
-        self.plotter.setMinimumSize(640, 320)
+        # The 3D view is made when the page is first shown: VTK, pyvista and
+        # the plate (~1.5 s together) stay out of the window's start-up. A
+        # plain thread warms them up (imports; the booth's surfaces, numpy
+        # only: it touches no VTK object and no widget) once the window has
+        # painted; the first show joins it and builds the meshes in the GUI thread.
+        self.plotter = None
+        self._building = False
+        self._placeholder = QLabel("Preparing the lightbooth …")
+        self._placeholder.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self._placeholder.setMinimumSize(640, 320)
         self._handles = {}
-        # The booth's surfaces (plate generation: ~0.7 s) are prepared in a
-        # plain thread (numpy only, no VTK, no Qt) while the window starts;
-        # the meshes are built in the GUI thread when the page is first shown.
-        self._content_thread = threading.Thread(target=scene_content, name="scene-content",
-                                                daemon=True)
-        self._content_thread.start()
+        self._warmup = threading.Thread(target=_warm_up, name="scene-warm-up", daemon=True)
+        QTimer.singleShot(WARM_UP_DELAY_MS, self._start_warm_up)
 
         self.table = QTableWidget(len(_ROWS), 24)
         self.table.setVerticalHeaderLabels(_ROWS)
@@ -115,9 +126,9 @@ class ScenePage(QWidget):
         bottom_layout.addWidget(self.summary)
         bottom.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Maximum)
         self._bottom = bottom
-        layout = QVBoxLayout(self)
+        self._layout = layout = QVBoxLayout(self)
         layout.addLayout(top)
-        layout.addWidget(self.plotter, 1)  # the views take every pixel the table does not need
+        layout.addWidget(self._placeholder, 1)  # the views take every pixel the table leaves
         layout.addWidget(bottom, 0)
 
         self._refill_sources()
@@ -128,11 +139,36 @@ class ScenePage(QWidget):
             workspace.subscribe("profile-changed", lambda ws: self._relight_if_built()),
         ]
 
+    def _start_warm_up(self) -> None:
+        if not getattr(self, "_shut", False) and not self._warmup.is_alive() and not self._handles:
+            self._warmup.start()
+
     def _ensure_built(self) -> None:
-        """Build both booths (once), lit by the current source and profile."""
-        if self._handles or getattr(self, "_shut", False):
+        """Make the interactor and build both booths (once), lit by the current source and profile."""
+        if self._handles or self._building or getattr(self, "_shut", False):
             return
-        self._content_thread.join()
+        self._building = True  # creating the native VTK window can send events back here
+        try:
+            self._build()
+        finally:
+            self._building = False
+
+    def _build(self) -> None:
+        if self._warmup.is_alive():
+            self._warmup.join()
+        from pyvistaqt import QtInteractor
+
+        from workbench.scene.booth import build_booth
+
+        # multi_samples=1 and no FXAA: anti-aliasing off on purpose (module doc).
+        plotter = QtInteractor(self, shape=(1, 2), multi_samples=1, auto_update=False,
+                               border=False)
+        plotter.disable_anti_aliasing(all_renderers=True)
+        plotter.setMinimumSize(640, 320)
+        self._layout.replaceWidget(self._placeholder, plotter)
+        self.plotter = plotter
+        self._placeholder.hide()
+        self._placeholder.deleteLater()
         profile = self.workspace.profile
         display = profile.display_model()
         illuminant = resolve_illuminant(self._source_id)
@@ -143,6 +179,7 @@ class ScenePage(QWidget):
             self.plotter.add_text(_VIEW_TITLES[level], position="upper_left", font_size=10,
                                   color="white")
         self.plotter.link_views()
+        self.plotter.show()
         self._fit_cameras()
         self._update_errors(illuminant)
 
@@ -203,6 +240,8 @@ class ScenePage(QWidget):
     def patch_screen_point(self, level: int, index: int) -> tuple[int, int]:
         """(column, row) in :meth:`rendered_image` of ColorChecker patch ``index``'s centre at ``level``."""
         self._ensure_built()
+        from workbench.scene.booth import board_patch_world_point
+
         renderer = self.plotter.renderers[LEVELS.index(level)]
         renderer.SetWorldPoint(*board_patch_world_point(self._handles[level], index), 1.0)
         renderer.WorldToDisplay()
@@ -252,6 +291,8 @@ class ScenePage(QWidget):
             self.source_changed.emit(self._source_id)
 
     def _relight_now(self) -> None:
+        from workbench.scene.booth import relight_booth
+
         profile = self.workspace.profile
         display = profile.display_model()
         illuminant = resolve_illuminant(self._source_id)
@@ -315,6 +356,10 @@ class ScenePage(QWidget):
         return self._errors
 
     def _fit_cameras(self) -> None:
+        from workbench.scene.booth import booth_camera
+
+        if self.plotter is None:
+            return
         width, height = self.plotter.ren_win.GetSize()
         if width <= 0 or height <= 0:
             return
@@ -327,8 +372,10 @@ class ScenePage(QWidget):
 
     def showEvent(self, event):  # noqa: N802 - Qt's name
         super().showEvent(event)
-        self._ensure_built()
-        self._fit_cameras()
+        if self._handles:
+            self._fit_cameras()
+        else:  # build after the show has been handled, not inside it
+            QTimer.singleShot(0, self._ensure_built)
 
     def closeEvent(self, event):  # noqa: N802 - Qt's name
         self.shutdown()
@@ -348,6 +395,7 @@ class ScenePage(QWidget):
                 pass
         self._unsubscribe = []
         self._shut = True
-        self._content_thread.join(timeout=30)
-        if not getattr(self.plotter, "_closed", True):
+        if self._warmup.is_alive():
+            self._warmup.join(timeout=60)
+        if self.plotter is not None and not getattr(self.plotter, "_closed", True):
             self.plotter.close()
