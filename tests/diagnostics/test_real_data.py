@@ -1,0 +1,74 @@
+"""Real displays: the extension never worse than the baseline, drift named first, and Argyll as the peer."""
+
+import pytest
+
+from tests.test_diagnostics import REAL, needs_real_data
+from workbench.diagnostics.argyll import argyll_missing
+
+needs_argyll = pytest.mark.skipif(argyll_missing() is not None,
+                                  reason=f"argyll: {argyll_missing()}")
+LCD = REAL / "lcd-ti3"
+TI3 = ["dell-up2516d-displaycal.ti3", "monitor-displaycal.ti3",
+       "lcd-ti3/Apple_MacBookPro13-Late2013_2018-06-03_1459_i1d3_175p.ti3",
+       "lcd-ti3/HP_EliteBook835G7_2020-09-28_2130_i1d3_588p.ti3",
+       "lcd-ti3/KOIOS_K2418U_2019-04-01_1518_i1d3_417p.ti3",
+       "lcd-ti3/Microsoft_SurfacePro3-120QL01-001_2019-02-19_0841_i1d3_175p.ti3"]
+
+
+@needs_real_data
+@pytest.mark.parametrize("name", ["Apple_MacBookPro13-Late2013_2018-06-03_1459_i1d3_175p.ti3",
+                                  "HP_EliteBook835G7_2020-09-28_2130_i1d3_588p.ti3"])
+def test_drifting_and_unstable_displays_name_drift_before_what_it_could_masquerade_as(name):
+    from workbench.diagnostics import diagnose
+    from workbench.session_readers import read_session
+
+    diagnosis = diagnose(read_session(LCD / name))
+    names = [f.effect for f in diagnosis.findings]
+    assert names[0] == "temporal-drift", names
+    drift = diagnosis.findings[0]
+    assert "row order" in drift.evidence
+    assert any("row order" in why for _, why in diagnosis.untested)
+
+
+@needs_real_data
+@pytest.mark.slow
+@pytest.mark.parametrize("name", TI3)
+def test_no_extension_is_worse_than_the_baseline_and_ours_beats_argyll(name):
+    from workbench.diagnostics.real_data import _row
+
+    row = _row(REAL / name, REAL, with_argyll=argyll_missing() is None)
+    assert not row.error
+    assert row.extended_not_worse
+    if argyll_missing() is None:
+        assert row.beats_argyll, (row.best_ours, row.argyll)
+
+
+@needs_real_data
+@needs_argyll
+def test_argyll_peer_fits_the_same_rows_and_scores_the_same_held_out_colours(tmp_path):
+    import numpy as np
+
+    from workbench.diagnostics.argyll import fit_argyll_shaper_matrix, score_argyll
+    from workbench.session_readers import read_session
+
+    session = read_session(REAL / "dell-up2516d-displaycal.ti3")
+    fit_rows = session.without("validation")
+    profile = fit_argyll_shaper_matrix(fit_rows, tmp_path)
+    written = (tmp_path / "fit.ti3").read_text()
+    assert f"NUMBER_OF_SETS {len(fit_rows)}" in written  # exactly the fit rows
+    # absolute: the profile's white is the measured white in cd/m²
+    white = profile.forward(np.array([[255.0, 255.0, 255.0]]))[0]
+    np.testing.assert_allclose(white[1], session.white_XYZ[1], rtol=0.01)
+    score = score_argyll(session)
+    assert score.n == 108 and 0.1 < score.mean_dE00 < 1.0 and not score.unavailable
+
+
+def test_argyll_missing_says_so(monkeypatch):
+    import shutil
+
+    from workbench.diagnostics import argyll
+    from workbench.session import Session
+
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    score = argyll.score_argyll(Session(kind=["white"], rgb=[[255, 255, 255]], XYZ=[[95, 100, 108]]))
+    assert score.mean_dE00 is None and "argyll" in score.unavailable
