@@ -103,6 +103,11 @@ def test_a_full_simulated_calibration_fills_the_plots_shows_the_diagnosis_and_ex
     assert "wrote" in export.status.text() and '"display_model"' in export.written.toPlainText()
     assert window.workspace.profile_path == tmp_path / "headset.vrprofile.json"
     assert "headset.vrprofile.json" in window.windowTitle()
+    assert export.bundle_path.text() == str(tmp_path / "headset-bundle")
+    with qtbot.waitSignal(export.bundle_written, timeout=RUN_TIMEOUT_MS):
+        _click(qtbot, export.bundle_button)
+    manifest = (tmp_path / "headset-bundle" / "bundle.json").read_text()
+    assert "display_inverse.cube" in manifest and "wrote" in export.bundle_status.text()
 
 
 def test_pause_holds_the_run_and_resume_finishes_it(qtbot, window, tmp_path):

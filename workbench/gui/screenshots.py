@@ -90,7 +90,10 @@ def save_screenshots(window, directory: Path, *, path=None, time_scale: float | 
                 page.finish_drawing()
             if key == "export" and callable(getattr(page, "export", None)):
                 page.export()  # into the temporary session directory: the page shows what it wrote
-                QApplication.processEvents()
+                bundles = []
+                page.bundle_written.connect(bundles.append)
+                page.write_bundle()  # beside the profile, in the temporary session directory
+                _wait(lambda: bundles, what="the runtime bundle")
             file = directory / f"{key}.png"
             if callable(getattr(page, "save_screenshot", None)):
                 page.save_screenshot(file)

@@ -1,4 +1,5 @@
-"""Export: write the profile of the current diagnosis (validated before writing) and show what was written."""
+"""Export: write the profile of the current diagnosis (validated before writing), and the runtime bundle
+of the current profile (:func:`workbench.export.write_bundle`, off the GUI thread); show what was written."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ from PySide6.QtWidgets import (
 )
 
 from workbench.errors import WorkbenchError
-from workbench.gui.workers import describe_error
+from workbench.gui.workers import CallWorker, describe_error
 
 __all__ = ["ExportPage"]
 
@@ -31,10 +32,13 @@ class ExportPage(QWidget):
     -------
     exported(object)
         The path of the profile written.
+    bundle_written(object)
+        The :class:`~workbench.export.bundle.BundleSummary` of the bundle written.
     """
 
     title = "Export"
     exported = Signal(object)
+    bundle_written = Signal(object)
 
     def __init__(self, workspace, parent=None):
         super().__init__(parent)
@@ -58,13 +62,36 @@ class ExportPage(QWidget):
         row.addWidget(self.path, 1)
         row.addWidget(browse)
         row.addWidget(self.export_button)
+        self.bundle_path = QLineEdit()
+        self.bundle_path.setPlaceholderText("folder of the runtime bundle (new, empty, or an earlier bundle)")
+        self.bundle_button = QPushButton("Write runtime bundle")
+        self.bundle_button.setToolTip("the current profile's 3D LUT, display inverse, lights table and the "
+                                      "runtime loaders, as 'export PROFILE --bundle DIR' writes them")
+        self.bundle_button.clicked.connect(lambda: self.write_bundle())
+        self.bundle_status = QLabel("")
+        self.bundle_status.setWordWrap(True)
+        self.bundle_status.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        bundle_row = QHBoxLayout()
+        bundle_row.addWidget(QLabel("bundle"))
+        bundle_row.addWidget(self.bundle_path, 1)
+        bundle_row.addWidget(self.bundle_button)
+        self._workers: list = []
         layout = QVBoxLayout(self)
         layout.addWidget(self.explanation)
         layout.addLayout(row)
         layout.addWidget(self.status)
+        layout.addLayout(bundle_row)
+        layout.addWidget(self.bundle_status)
         layout.addWidget(self.written, 1)
         workspace.subscribe("diagnosis-changed", lambda ws: self._refresh())
+        workspace.subscribe("profile-changed", lambda ws: self._refresh_bundle())
         self._refresh()
+        self._refresh_bundle()
+
+    def _refresh_bundle(self) -> None:
+        path = self.workspace.profile_path
+        if path is not None and not self.bundle_path.text():
+            self.bundle_path.setText(str(path.parent / f"{path.name.split('.')[0]}-bundle"))
 
     def _refresh(self) -> None:
         diagnosis = self.workspace.diagnosis
@@ -108,3 +135,38 @@ class ExportPage(QWidget):
         self.written.setPlainText(text)
         self.exported.emit(written)
         return written
+
+    def write_bundle(self, directory=None) -> None:
+        """Write the runtime bundle of the current profile into ``directory`` (off the GUI thread)."""
+        from workbench.export import write_bundle
+
+        text = str(directory or self.bundle_path.text()).strip()
+        if not text:
+            self.bundle_status.setText("<span style='color:#b03a2e'>choose a folder for the bundle</span>")
+            return
+        profile, target = self.workspace.profile, Path(text)
+        self.bundle_button.setEnabled(False)
+        self.bundle_status.setText(f"writing {target}…")
+        worker = CallWorker(lambda: write_bundle(profile, target), self)
+        worker.done.connect(self._bundle_done)
+        worker.failed.connect(lambda message: self.bundle_status.setText(
+            f"<span style='color:#b03a2e'><b>bundle not written:</b> {message}</span>"))
+        worker.finished.connect(lambda: (self.bundle_button.setEnabled(True), self._workers.remove(worker)))
+        self._workers.append(worker)
+        worker.start()
+
+    def _bundle_done(self, summary) -> None:
+        accuracy = summary.cube_accuracy
+        files = sorted(p.relative_to(summary.directory).as_posix() for p in Path(summary.directory).rglob("*")
+                       if p.is_file())
+        self.bundle_status.setText(
+            f"<b>wrote</b> <code>{summary.directory}</code>: {len(summary.lights)} light(s), "
+            f"display_inverse.cube {accuracy.size}³ (ΔE00 vs the exact inverse: mean {accuracy.mean_dE00:.3f}, "
+            f"max {accuracy.max_dE00:.3f}); {len(files)} files: {', '.join(files[:12])}"
+            + (", …" if len(files) > 12 else ""))
+        self.bundle_written.emit(summary)
+
+    def shutdown(self) -> None:
+        """Wait for a bundle being written (teardown)."""
+        for worker in list(self._workers):
+            worker.wait()
