@@ -39,15 +39,11 @@ _ROWS = ("Level 2 shows", "Level 1 ΔE00", "Level 2 ΔE00", "L1 |ΔR ΔG ΔB|", 
 """Rows of the error table; its columns are the 24 patches."""
 
 WARM_UP_DELAY_MS = 1500
-"""How long after the page is made the warm-up thread starts (after the window's first paint)."""
+"""How long after the page is made the surfaces thread starts (after the window's first paint)."""
 
 
 def _warm_up() -> None:
-    """Import VTK, pyvista and pyvistaqt and prepare the booth's surfaces (no VTK object, no widget)."""
-    import pyvistaqt  # noqa: F401 - the import is the work
-
-    import workbench.scene.booth  # noqa: F401
-
+    """Prepare the booth's surfaces (numpy only: no VTK object, no widget)."""
     scene_content()
 
 
@@ -82,9 +78,11 @@ class ScenePage(QWidget):
 
         # The 3D view is made when the page is first shown: VTK, pyvista and
         # the plate (~1.5 s together) stay out of the window's start-up. A
-        # plain thread warms them up (imports; the booth's surfaces, numpy
-        # only: it touches no VTK object and no widget) once the window has
-        # painted; the first show joins it and builds the meshes in the GUI thread.
+        # plain thread prepares the booth's surfaces (the plate: numpy, no VTK
+        # object, no widget) once the window has painted; the first show
+        # joins it, imports VTK (in the GUI thread: a VTK module's import
+        # holds the GIL for long stretches, which would stall a calibration
+        # running meanwhile) and builds the meshes.
         self.plotter = None
         self._building = False
         self._placeholder = QLabel("Preparing the lightbooth …")
