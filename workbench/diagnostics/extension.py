@@ -24,7 +24,8 @@ from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift,
 from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
 from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_tone_curve
 
-__all__ = ["TERMS", "fitted_on", "fit_extended", "grey_channel_outputs"]
+__all__ = ["TERMS", "PARAMETRIC_TONE_FORMS", "fitted_on", "fit_extended",
+           "grey_channel_outputs"]
 
 TERMS = {
     "temporal-drift": "drift correction from the white references",
@@ -138,14 +139,19 @@ def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
                               exponent=float(exponent))
 
 
-def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=None
-                 ) -> ExtendedDisplay:
+PARAMETRIC_TONE_FORMS = ("power", "gog", "extended-power")
+"""Tone forms without the spline (whose leave-one-out score is the costly part of the choice)."""
+
+
+def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=None,
+                 tone_candidates=("power", "gog", "extended-power", "spline")) -> ExtendedDisplay:
     """The extended model with the terms for ``effects`` (ids of found effects).
 
     Where a channel has fewer than three sweep points (published primaries
     only), its tone curve is the ``baseline``'s power law. ``tone_forms``
     (one form per channel) skips the choice of form by BIC and refits those
-    forms: the cross-validation folds refit the chosen model, not a new choice.
+    forms: the cross-validation folds refit the chosen model, not a new choice;
+    ``tone_candidates`` are the forms the BIC chooses among otherwise.
     """
     effects = set(effects)
     interaction = _interaction_term(context) if "channel-interaction" in effects else None
@@ -159,7 +165,7 @@ def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=N
         elif "tone-curve-shape" in effects and tone_forms is not None:
             curve = fit_tone_curve(drive, output, tone_forms[sweep.channel])
         elif "tone-curve-shape" in effects:
-            curve, _ = select_tone_curve(drive, output)
+            curve, _ = select_tone_curve(drive, output, tone_candidates)
         else:
             curve = fit_tone_curve(drive, output, "power")
         tone.append(curve)

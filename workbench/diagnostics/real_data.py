@@ -120,8 +120,8 @@ class RealDataTable:
                                  for e, z, i, m in row.findings) or "none"
             argyll = (_figures(row.argyll) if row.argyll and row.argyll.get("mean_dE00") is not None
                       else (row.argyll or {}).get("unavailable") or "—")
-            verdict = {True: f"better ({row.best_ours[0]})", False: "worse",
-                       None: "—"}[row.beats_argyll]
+            verdict = ("—" if row.beats_argyll is None else
+                       f"better ({row.best_ours[0]})" if row.beats_argyll else "worse")
             lines.append(f"| `{row.file}` | {findings} | {_figures(row.baseline)} | "
                          f"{_figures(row.extended)} | {_figures(row.fallback)} | {argyll} | "
                          f"{verdict} |")

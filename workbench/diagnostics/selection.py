@@ -30,7 +30,12 @@ from workbench.diagnostics.detectors import (
     run_detectors,
 )
 from workbench.diagnostics.cross_validation import select_terms
-from workbench.diagnostics.extension import TERMS, fit_extended, fitted_on
+from workbench.diagnostics.extension import (
+    PARAMETRIC_TONE_FORMS,
+    TERMS,
+    fit_extended,
+    fitted_on,
+)
 from workbench.diagnostics.significance import (
     FAMILY_ALPHA,
     FIXED_COLOURS,
@@ -218,13 +223,18 @@ def diagnose(session: Session) -> Diagnosis:
         baseline = GammaMatrixDisplay.fit(fit_session)
     context, results = run_detectors(fit_session)
     tone_forms = None
-    if any(r.effect == "tone-curve-shape" and r.significant for r in results):
-        # the forms are chosen once, by BIC on the fit rows (with every significant term, so
-        # grey-derived points are read through them); every later fit refits these forms
-        tone_forms = _tone_forms(fit_extended(context, [r.effect for r in results
-                                                        if r.significant], baseline))
+    significant = [r.effect for r in results if r.significant]
+    if "tone-curve-shape" in significant:
+        # the forms are chosen by BIC on the fit rows (with every significant term, so
+        # grey-derived points are read through them); every later fit refits these forms.
+        # Materiality is judged among the parametric forms; the spline joins the choice
+        # only once the shape is a finding (its leave-one-out score is the costly part)
+        tone_forms = _tone_forms(fit_extended(context, significant, baseline,
+                                              tone_candidates=PARAMETRIC_TONE_FORMS))
     results = _materiality(context, results, baseline, tone_forms)
     found = [r.effect for r in results if r.found]
+    if "tone-curve-shape" in found:
+        tone_forms = _tone_forms(fit_extended(context, significant, baseline))
     if "temporal-drift" not in found and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise)
     terms, cross_validation = select_terms(context, found, baseline,

@@ -40,11 +40,11 @@ def _noise_share(context: DiagnosisContext, predicted: np.ndarray, white: np.nda
     rng = np.random.default_rng(20240611)
     covariance = context.noise.covariance(predicted)
     factor = np.linalg.cholesky(covariance + 1e-18 * np.eye(3))
-    draws = []
-    for _ in range(NOISE_DRAWS):
-        noisy = predicted + np.einsum("nij,nj->ni", factor, rng.standard_normal(predicted.shape))
-        draws.append(delta_E2000(noisy, predicted, white))
-    draws = np.asarray(draws)
+    shocks = rng.standard_normal((NOISE_DRAWS,) + predicted.shape)
+    noisy = predicted + np.einsum("nij,knj->kni", factor, shocks)
+    reference = np.broadcast_to(predicted, noisy.shape)
+    draws = np.asarray(delta_E2000(noisy.reshape(-1, 3), reference.reshape(-1, 3), white)
+                       ).reshape(NOISE_DRAWS, -1)
     return float(draws.mean()), float(draws.mean(axis=0).std(ddof=1) if draws.shape[1] > 1 else 0)
 
 
