@@ -11,7 +11,7 @@ import pytest
 
 from tests.diagnostics.independent_generator import FORMS, generate_session
 from tests.diagnostics.suite import run_suite, suite_cases
-from workbench.diagnostics import diagnose
+from workbench.diagnostics import MATERIALITY_FLOOR_DE00, diagnose
 
 
 def test_the_generator_shares_no_form_with_the_simulated_headset_or_the_extension():
@@ -41,9 +41,13 @@ def test_one_hidden_form_per_effect_is_named_without_false_causes(effect, form):
     generated = generate_session({effect: form}, seed=41)
     diagnosis = diagnose(generated.session)
     named = {f.effect for f in diagnosis.findings} - {"unexplained-residual"}
-    assert named == {effect}
+    # the stated consequence: a step between two white references is corrected by a ramp
+    # between them, so a sweep measured across it may show a (material) shape
+    consequences = {"temporal-drift": {"tone-curve-shape"}}.get(effect, set())
+    assert effect in named and named - {effect} <= consequences
+    assert diagnosis.findings[0].effect == effect
     finding = next(f for f in diagnosis.findings if f.effect == effect)
-    assert finding.z > finding.critical_z and finding.impact_dE00 >= 0.1
+    assert finding.z > finding.critical_z and finding.impact_dE00 >= MATERIALITY_FLOOR_DE00
     assert np.isfinite(finding.standard_error) and finding.standard_error > 0
     if effect == "temporal-drift":
         # the step is named as such; the validation colours (measured last) may all lie after

@@ -38,8 +38,10 @@ __all__ = [
 FAMILY_ALPHA = 0.05
 """Chance of any false finding in a clean session, over all detectors together."""
 
-MATERIALITY_FLOOR_DE00 = 0.1
-"""A finding must change the colours of :data:`FIXED_COLOURS` by at least this mean ΔE00."""
+MATERIALITY_FLOOR_DE00 = 0.05
+"""A finding must change the colours of :data:`FIXED_COLOURS` by at least this mean ΔE00 (a
+twentieth of a just-noticeable difference on average, several times that on the colours the
+effect touches)."""
 
 _LEVELS = np.array([0.0, 64.0, 128.0, 191.0, 255.0])
 FIXED_COLOURS = np.stack(np.meshgrid(_LEVELS, _LEVELS, _LEVELS, indexing="ij"),
