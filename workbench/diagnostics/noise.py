@@ -169,7 +169,8 @@ class NoiseModel:
         if self.source == "sweep scatter":
             text += (f" (from the scatter of {self.sweep_points} sweep points about a local fit, "
                      "between points measured one after another")
-            if self.scatter_gain_sd is not None and self.scatter_gain_sd > 1.5 * self.gain_sd:
+            if (self.scatter_gain_sd is not None
+                    and self.scatter_gain_sd > 1.5 * self.relative_sd_at(1.0)):
                 text += (f"; over the whole session they scatter by {100 * self.scatter_gain_sd:.2f} %:"
                          " the display wanders")
             if self.repeat_gain_sd is not None:
