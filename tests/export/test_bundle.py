@@ -42,6 +42,9 @@ def test_bundle_holds_every_file_and_a_profile_that_records_the_contracts(simula
     assert profile.runtime["colour_space"] == RUNTIME_COLOUR_SPACE
     assert [light["id"] for light in profile.lights] == list(BUNDLE_LIGHTS)
     assert summary.drive_correction  # channel interaction: the drive is not affine in XYZ
+    inverse = json.loads((bundle / "display_inverse.json").read_text())["accuracy"]
+    assert inverse["identical_share"] == round(summary.inverse_accuracy.identical, 5) >= 0.99
+    assert inverse["max_counts"] <= 1
 
 
 def test_lights_json_is_the_level1_table(simulated_bundle, simulated_profile):

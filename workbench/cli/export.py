@@ -54,6 +54,12 @@ def _export(args) -> int:
     print(f"display_inverse.cube {accuracy.size}³: trilinear vs exact inverse on "
           f"{accuracy.samples} in-gamut colours, ΔE00 mean {accuracy.mean_dE00:.3f}, "
           f"p95 {accuracy.p95_dE00:.3f}, max {accuracy.max_dE00:.3f}")
+    inverse = summary.inverse_accuracy
+    print(f"runtime display inverse: integer DAC equal to the model's on {100 * inverse.identical:.2f} "
+          f"% of {inverse.samples} colours (largest difference {inverse.max_counts} count(s))"
+          + ("" if inverse.identical >= 0.99 else
+             "  [warning: this model's inverse is not smooth enough for the runtime's "
+             "correction table; level-2 texels will differ from the workbench's]"))
     for cube in summary.cubes:
         choice = cube["choice"]
         worst = min(choice["identical_share"].values())

@@ -40,7 +40,12 @@ from workbench.export.level2_files import (
     runtime_level2_texels,
 )
 from workbench.export.lights_table import lights_table
-from workbench.export.runtime_inverse import RuntimeDisplayInverse, runtime_display_inverse
+from workbench.export.runtime_inverse import (
+    InverseAccuracy,
+    RuntimeDisplayInverse,
+    runtime_display_inverse,
+    runtime_inverse_accuracy,
+)
 
 __all__ = [
     "BUNDLE_FORMAT",
@@ -50,6 +55,7 @@ __all__ = [
     "BundleSummary",
     "ComponentChoice",
     "CubeAccuracy",
+    "InverseAccuracy",
     "RuntimeDisplayInverse",
     "choose_cube_basis",
     "cube_accuracy",
@@ -59,6 +65,7 @@ __all__ = [
     "lights_table",
     "read_cube_file",
     "runtime_display_inverse",
+    "runtime_inverse_accuracy",
     "runtime_file",
     "runtime_level2_texels",
     "srgb_input_to_XYZ",

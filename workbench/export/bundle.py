@@ -51,7 +51,11 @@ from workbench.export.level2_files import (
     write_level2_cube,
 )
 from workbench.export.lights_table import lights_table
-from workbench.export.runtime_inverse import runtime_display_inverse
+from workbench.export.runtime_inverse import (
+    InverseAccuracy,
+    runtime_display_inverse,
+    runtime_inverse_accuracy,
+)
 from workbench.fileio import atomic_writer
 from workbench.profile import PROFILE_FORMAT_VERSION, RUNTIME_COLOUR_SPACE, Profile, save_profile
 
@@ -91,12 +95,14 @@ class BundleSummary:
     cube_accuracy: CubeAccuracy
     cubes: tuple[dict, ...]
     drive_correction: bool
+    inverse_accuracy: InverseAccuracy
 
     def to_json(self) -> dict:
         return {"bundle": str(self.directory), "lights": list(self.lights),
                 "display_inverse_cube": {"size": self.cube_accuracy.size,
                                          **self.cube_accuracy.to_json()},
-                "drive_correction": self.drive_correction, "cubes": list(self.cubes)}
+                "drive_correction": self.drive_correction,
+                "runtime_inverse": self.inverse_accuracy.to_json(), "cubes": list(self.cubes)}
 
 
 def _cube_name(path: Path, taken: set[str]) -> str:
@@ -158,6 +164,8 @@ def _readme(profile: Profile, manifest: dict, accuracy: CubeAccuracy) -> str:
         correction=("yes: this model's drive is not affine in XYZ, so display_inverse.json "
                     "names display_drive_correction.bin" if manifest["drive_correction"]
                     else "none: this model's drive is affine in XYZ"),
+        inverse_identical=f"{100 * manifest['runtime_inverse']['identical_share']:.2f}",
+        inverse_max=manifest["runtime_inverse"]["max_counts"],
         version=BUNDLE_FORMAT_VERSION)
 
 
@@ -206,6 +214,7 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
         loaded.append((name, cube))
 
     inverse = runtime_display_inverse(display)
+    inverse_accuracy = runtime_inverse_accuracy(inverse, display)
     table = display_inverse_table(display, profile.k, lut_size)
     accuracy = cube_accuracy(table, display, profile.k)
     white = white_mapping_XYZ(display, profile.k)
@@ -241,7 +250,8 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
                                   "red fastest; trilinear vs exact inverse, in gamut: mean "
                                   f"dE00 {accuracy.mean_dE00:.4f}, p95 {accuracy.p95_dE00:.4f}, "
                                   f"max {accuracy.max_dE00:.4f}"])
-        _write_json(staging / "display_inverse.json", inverse.to_json())
+        _write_json(staging / "display_inverse.json",
+                    {**inverse.to_json(), "accuracy": inverse_accuracy.to_json()})
         if inverse.correction is not None:
             with atomic_writer(staging / "display_drive_correction.bin", "wb") as handle:
                 handle.write(np.ascontiguousarray(inverse.correction, dtype="<f4").tobytes())
@@ -265,6 +275,7 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
                     "display_inverse_cube": "display_inverse.cube",
                     "display_inverse": "display_inverse.json",
                     "drive_correction": inverse.correction is not None,
+                    "runtime_inverse": inverse_accuracy.to_json(),
                     "white_mapping_XYZ": [float(v) for v in white],
                     "lights_file": "lights.json", "lights": list(light_ids),
                     "cubes": level2, "apl": None}
@@ -272,4 +283,5 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
             handle.write(_readme(bundle_profile, manifest, accuracy))
         _write_json(staging / "bundle.json", manifest)
     return BundleSummary(directory=directory, lights=light_ids, cube_accuracy=accuracy,
-                         cubes=tuple(level2), drive_correction=inverse.correction is not None)
+                         cubes=tuple(level2), drive_correction=inverse.correction is not None,
+                         inverse_accuracy=inverse_accuracy)

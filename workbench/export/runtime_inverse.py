@@ -38,8 +38,10 @@ __all__ = [
     "UNREACHED_THRESHOLD",
     "DEFAULT_CORRECTION_SIZE",
     "CORRECTION_DOMAIN",
+    "InverseAccuracy",
     "RuntimeDisplayInverse",
     "runtime_display_inverse",
+    "runtime_inverse_accuracy",
     "sample_trilinear",
 ]
 
@@ -239,3 +241,31 @@ def runtime_display_inverse(display: DisplayModel, *, correction_size: int = DEF
     return RuntimeDisplayInverse(XYZ_to_drive=matrix, drive_offset=offset, thresholds=thresholds,
                                  correction=correction, correction_domain=CORRECTION_DOMAIN,
                                  model=display.describe())
+
+
+@dataclass(frozen=True)
+class InverseAccuracy:
+    """How often the runtime's integer DAC equals the model's own (:meth:`DisplayModel.inverse_rgb8`).
+
+    Measured on ``samples`` colours the display shows for uniformly random DAC
+    values: ``identical`` is the share (0..1) with the same integer DAC in all
+    three channels, ``max_counts`` the largest difference in any channel.
+    """
+
+    identical: float
+    max_counts: int
+    samples: int
+
+    def to_json(self) -> dict:
+        return {"identical_share": round(self.identical, 5), "max_counts": self.max_counts,
+                "n": self.samples,
+                "protocol": "colours of uniformly random DAC values, runtime integer DAC vs the "
+                            "model's own inverse"}
+
+
+def runtime_inverse_accuracy(inverse: RuntimeDisplayInverse, display: DisplayModel, *,
+                             samples: int = 20000, seed: int = 0) -> InverseAccuracy:
+    """Measure ``inverse`` against ``display``'s own inverse (:class:`InverseAccuracy`)."""
+    XYZ = display.forward(np.random.default_rng(seed).uniform(0.0, 255.0, (samples, 3)))
+    difference = np.abs(inverse.dac(XYZ) - display.inverse_rgb8(XYZ)).max(axis=-1)
+    return InverseAccuracy(float(np.mean(difference == 0)), int(difference.max()), samples)
