@@ -65,6 +65,8 @@ DAMAGES = {
     "layers that do not fit the channels": (
         lambda b: _edit_json(b / "level2/paint/coefficients.json", lambda d: d.update(layers=1)),
         ["texture", "paint", "--light", "cie-a"], "channels need"),
+    "cubes not a list": (lambda b: _edit_json(b / "bundle.json", lambda d: d.update(cubes=3)),
+                         ["texture", "paint", "--light", "cie-a"], "'cubes' must be a list"),
     "unknown light": (lambda b: None, ["light", "cie-f2"], "no light 'cie-f2'"),
     "unknown texture": (lambda b: None, ["texture", "../etc", "--light", "cie-a"],
                         "no level-2 texture '../etc'"),
@@ -94,3 +96,74 @@ def test_the_undamaged_copy_works(damaged, tmp_path, capsys):
     assert module.main([str(damaged), "cube", "1", "1", "1"]) == 0
     dac = json.loads(capsys.readouterr().out.splitlines()[-1])["dac"]
     assert np.all(np.array(dac) > 200)
+
+
+# Hypothesis: whatever JSON a bundle file holds, the consumer answers or says "error: ..." (exit 2).
+import contextlib  # noqa: E402
+import io  # noqa: E402
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+_values = st.recursive(
+    st.none() | st.booleans() | st.integers(-300, 300) | st.floats(allow_nan=False, width=32)
+    | st.text(max_size=6),
+    lambda children: st.lists(children, max_size=4) | st.dictionaries(st.text(max_size=5),
+                                                                      children, max_size=3),
+    max_leaves=10)
+
+_FILES = ("bundle.json", "lights.json", "display_inverse.json", "level2/paint/coefficients.json",
+          "level2/paint/lights.json")
+_COMMANDS = (["light", "cie-a"], ["texture", "paint", "--light", "cie-a"])
+
+
+def _places(value, prefix=()):
+    yield prefix
+    if isinstance(value, dict):
+        for key, item in value.items():
+            yield from _places(item, prefix + (key,))
+    elif isinstance(value, list):
+        for index, item in enumerate(value[:3]):
+            yield from _places(item, prefix + (index,))
+
+
+@pytest.fixture(scope="module")
+def fuzz_bundle(tmp_path_factory, simulated_bundle):
+    source, _ = simulated_bundle
+    copy = tmp_path_factory.mktemp("fuzz") / "bundle"
+    shutil.copytree(source, copy)
+    return copy
+
+
+@settings(max_examples=150, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_property_any_bundle_json_gives_an_answer_or_one_error(fuzz_bundle, data):
+    name = data.draw(st.sampled_from(_FILES))
+    path = fuzz_bundle / name
+    original = path.read_text()
+    document = json.loads(original)
+    places = [p for p in _places(document)]
+    place = data.draw(st.sampled_from(places))
+    value = data.draw(_values)
+    if place:
+        target = document
+        for key in place[:-1]:
+            target = target[key]
+        target[place[-1]] = value
+    else:
+        document = value
+    command = data.draw(st.sampled_from(_COMMANDS))   # every draw before the file changes
+    module = consumer_module(fuzz_bundle)
+    path.write_text(json.dumps(document))
+    out = fuzz_bundle.parent / "fuzz.png"
+    argv = [str(fuzz_bundle), *command] + (["--out", str(out)] if command[0] == "texture" else [])
+    stderr = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(stderr), contextlib.redirect_stdout(io.StringIO()):
+            status = module.main(argv)
+    finally:
+        path.write_text(original)
+    assert status in (0, 2)
+    if status == 2:
+        assert stderr.getvalue().startswith("error: ")

@@ -132,7 +132,10 @@ class Bundle:
 
     # level 2 ---------------------------------------------------------------------------
     def level2(self, name, light_id):
-        cubes = [c for c in self.manifest.get("cubes", []) if isinstance(c, dict)]
+        cubes = self.manifest.get("cubes")
+        if not isinstance(cubes, list):
+            raise BundleError(f"{self.folder}/bundle.json: 'cubes' must be a list")
+        cubes = [c for c in cubes if isinstance(c, dict)]
         if not any(c.get("name") == name for c in cubes):
             raise BundleError(f"no level-2 texture {name!r} in the bundle; it has "
                               f"{[c.get('name') for c in cubes]}")
