@@ -149,7 +149,8 @@ def _readme(profile: Profile, manifest: dict, accuracy: CubeAccuracy) -> str:
     template = string.Template(runtime_file("README.md.template").read_text(encoding="utf-8"))
     cubes = manifest["cubes"]
     cube_lines = "\n".join(
-        f"- `level2/{c['name']}/`: {c['width']}×{c['height']} texels, K = {c['components']} "
+        f"- `level2/{c['name']}/`: {c['width']} × {c['height']} texels (width × height), "
+        f"K = {c['components']} "
         f"basis coefficients + {c['split']} precision channel(s) = {c['channels']} channels in "
         f"{c['layers']} RGBA16F layer(s)" for c in cubes) or "- (none: export with --cube CUBE)"
     example_cube = cubes[0]["name"] if cubes else "CUBE"
@@ -161,9 +162,9 @@ def _readme(profile: Profile, manifest: dict, accuracy: CubeAccuracy) -> str:
         max=f"{accuracy.max_dE00:.3f}", samples=accuracy.samples,
         white=", ".join(f"{v:.4g}" for v in manifest["white_mapping_XYZ"]),
         k=f"{profile.k:g}", colour_space=RUNTIME_COLOUR_SPACE,
-        correction=("yes: this model's drive is not affine in XYZ, so display_inverse.json "
-                    "names display_drive_correction.bin" if manifest["drive_correction"]
-                    else "none: this model's drive is affine in XYZ"),
+        correction=("This model's drive is not affine in XYZ: the correction table is "
+                    "display_drive_correction.bin" if manifest["drive_correction"]
+                    else "This model's drive is affine in XYZ: no correction table"),
         inverse_identical=f"{100 * manifest['runtime_inverse']['identical_share']:.2f}",
         inverse_max=manifest["runtime_inverse"]["max_counts"],
         version=BUNDLE_FORMAT_VERSION)
