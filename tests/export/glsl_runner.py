@@ -43,6 +43,8 @@ def level2_inputs(bundle: Path, cube: str, light_id: str) -> dict:
             "coefficients": (folder / header["file"]).read_bytes(),
             "rows": rows, "offset": tuple(float(v) for v in record["offset"]),
             "thresholds": np.asarray(inverse["thresholds"], dtype=np.float32).tobytes(),
+            "cells": np.asarray(inverse["cells"], dtype=np.float32).tobytes(),
+            "cell_count": len(inverse["cells"]) // 3,
             "texel_table": np.asarray(record["texel_table"], dtype=np.float32).tobytes(),
             "unreachable": tuple(int(v) for v in record["unreachable_dac"]),
             "correction_size": correction["size"], "correction_domain": tuple(correction["domain"]),
@@ -57,10 +59,11 @@ def _textures(ctx, inputs):
     size = inputs["correction_size"]
     correction = (ctx.texture3d((size, size, size), 3, inputs["correction"], dtype="f4") if size
                   else ctx.texture3d((1, 1, 1), 3, np.zeros(3, np.float32).tobytes(), dtype="f4"))
-    for texture in (coefficients, thresholds, texel_table, correction):
+    cells = ctx.texture((inputs["cell_count"], 3), 1, inputs["cells"], dtype="f4")
+    for texture in (coefficients, thresholds, texel_table, correction, cells):
         import moderngl
         texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    return coefficients, thresholds, texel_table, correction
+    return coefficients, thresholds, texel_table, correction, cells
 
 
 def _draw(ctx, program, inputs, bind):
@@ -82,7 +85,8 @@ def run_glsl(ctx, vertex: str, fragment: str, inputs: dict) -> np.ndarray:
 
     def bind():
         for unit, (name, texture) in enumerate(zip(
-                ("coefficients", "thresholds", "texel_table", "drive_correction"), textures)):
+                ("coefficients", "thresholds", "texel_table", "drive_correction", "cells"),
+                textures)):
             texture.use(location=unit)
             program[name].value = unit
         program["layers"].value = inputs["layers"]
@@ -107,7 +111,8 @@ def run_spirv_cross_glsl(ctx, vertex: str, fragment: str, inputs: dict) -> np.nd
     block += np.array(list(inputs["unreachable"]) + [0], np.int32).tobytes()
     buffer = ctx.buffer(bytes(block))
     names = {"coefficients": "_VrCoefficients", "thresholds": "_VrThresholds",
-             "texel_table": "_VrTexelTable", "drive_correction": "_VrDriveCorrection"}
+             "texel_table": "_VrTexelTable", "drive_correction": "_VrDriveCorrection",
+             "cells": "_VrCells"}
 
     def bind():
         for unit, (key, texture) in enumerate(zip(names, textures)):

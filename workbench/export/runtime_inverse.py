@@ -16,7 +16,10 @@ A runtime (shader, reference consumer) evaluates that as:
 3. ``u = √clip(drive, 0, 1)`` (float32) and ``DAC = #{v : thresholds[c, v] ≤ u}``,
    the thresholds being the smallest ``u`` that gives each DAC level 1..255
    (found by bisection on the model's own ``dac_from_drive``; a level never
-   reached holds :data:`UNREACHED_THRESHOLD`).
+   reached holds :data:`UNREACHED_THRESHOLD`). A shader finds that count in
+   one look-up and a step or two: ``cells[c, ⌊u·(L − 1)⌋]`` is a lower bound
+   of it (:data:`CELLS` cells in ``u``), then it steps up while the next
+   threshold is ≤ ``u``.
 
 For a separable model steps 1 and 3 give the model's integer DAC except
 within float32 rounding of a threshold; with a correction table the
@@ -36,6 +39,7 @@ from workbench.errors import InputError
 
 __all__ = [
     "UNREACHED_THRESHOLD",
+    "CELLS",
     "DEFAULT_CORRECTION_SIZE",
     "CORRECTION_DOMAIN",
     "InverseAccuracy",
@@ -44,6 +48,9 @@ __all__ = [
     "runtime_inverse_accuracy",
     "sample_trilinear",
 ]
+
+CELLS = 4096
+"""Cells of the lower-bound table in ``u = √drive`` (at most ~0.2 DAC level per cell)."""
 
 UNREACHED_THRESHOLD = 2.0
 """Threshold of a DAC level the display never reaches (``u`` never exceeds 1; JSON has no inf)."""
@@ -93,6 +100,8 @@ class RuntimeDisplayInverse:
     drive_offset : ndarray (3,)
     thresholds : ndarray (3, 255), float32
         Smallest ``u = √drive`` giving DAC ≥ v, v = 1..255.
+    cells : ndarray (3, CELLS), int32
+        A lower bound of the DAC for ``u`` in cell ``⌊u (CELLS − 1)⌋``.
     correction : ndarray (n, n, n, 3), float32, or None
         Exact drive at the affine-drive grid nodes, indexed ``[b, g, r]``.
     correction_domain : tuple of float
@@ -104,6 +113,7 @@ class RuntimeDisplayInverse:
     XYZ_to_drive: np.ndarray
     drive_offset: np.ndarray
     thresholds: np.ndarray
+    cells: np.ndarray
     correction: np.ndarray | None
     correction_domain: tuple[float, float]
     model: str
@@ -136,6 +146,7 @@ class RuntimeDisplayInverse:
             "XYZ_to_drive": [float(v) for v in self.XYZ_to_drive.reshape(-1)],
             "drive_offset": [float(v) for v in self.drive_offset],
             "thresholds": [float(v) for v in self.thresholds.reshape(-1)],
+            "cells": [int(v) for v in self.cells.reshape(-1)],
             "unreached_threshold": UNREACHED_THRESHOLD,
             "correction": {"size": 0, "domain": [0.0, 1.0], "file": ""}
             if self.correction is None else {
@@ -148,6 +159,9 @@ class RuntimeDisplayInverse:
                 "thresholds": "3 x 255 channel-major: thresholds[255 c + v - 1] is the smallest "
                               "sqrt(drive) of channel c giving DAC >= v; DAC = how many of the "
                               "channel's 255 thresholds are <= sqrt(clamp(drive, 0, 1)), float32",
+                "cells": f"3 x {CELLS} channel-major: a lower bound of that DAC for u in cell "
+                         f"floor(u * {CELLS - 1}); start there and step up while the next "
+                         "threshold (thresholds[255 c + DAC]) is <= u",
                 "correction": "size 0: none (the drive is affine in XYZ). Otherwise "
                               "display_drive_correction.bin, float32 little-endian "
                               "[b][g][r][3], red fastest: the display's drive at the node whose "
@@ -238,8 +252,12 @@ def runtime_display_inverse(display: DisplayModel, *, correction_size: int = DEF
             raise InputError(f"display model {display.describe()!r}: its inverse is not finite "
                              "over the drive range; it cannot be exported to a runtime")
         correction = exact.reshape(affine.shape).astype(np.float32)
+    # a thousandth of a cell below each cell's lower edge, so float rounding of u keeps a lower bound
+    edges = ((np.arange(CELLS) - 1e-3) / (CELLS - 1)).astype(np.float64)
+    cells = np.stack([np.searchsorted(thresholds[c].astype(np.float64), edges, side="right")
+                      for c in range(3)]).astype(np.int32)
     return RuntimeDisplayInverse(XYZ_to_drive=matrix, drive_offset=offset, thresholds=thresholds,
-                                 correction=correction, correction_domain=CORRECTION_DOMAIN,
+                                 cells=cells, correction=correction, correction_domain=CORRECTION_DOMAIN,
                                  model=display.describe())
 
 

@@ -13,6 +13,7 @@ Texture2DArray<float4> _VrCoefficients : register(t0);   // RGBA16F, ceil(C / 4)
 Texture2D<float> _VrThresholds : register(t1);           // R32F 255 x 3
 Texture2D<float> _VrTexelTable : register(t2);           // R32F 256 x 3, values 0..255
 Texture3D<float4> _VrDriveCorrection : register(t3);     // RGBA32F size^3 (rgb used)
+Texture2D<float> _VrCells : register(t4);                // R32F 4096 x 3: DAC lower bound per cell of u
 
 cbuffer VrLevel2 : register(b0)
 {
@@ -48,15 +49,12 @@ float3 VrCorrected(float3 drive)
 
 int VrDacLevel(int channel, float u)
 {
-    int low = 0;
-    int high = 255;  // answer: how many thresholds are <= u
-    [loop] while (low < high)
-    {
-        int middle = (low + high + 1) / 2;
-        if (_VrThresholds.Load(int3(middle - 1, channel, 0)) <= u) low = middle;
-        else high = middle - 1;
-    }
-    return low;
+    // how many of the channel's thresholds are <= u: from the cell's lower bound, step up
+    uint cellCount, rows;
+    _VrCells.GetDimensions(cellCount, rows);
+    int level = (int)_VrCells.Load(int3((int)(u * (float)(cellCount - 1)), channel, 0));
+    [loop] while (level < 255 && _VrThresholds.Load(int3(level, channel, 0)) <= u) ++level;
+    return level;
 }
 
 float4 VrLevel2Relight(int2 xy)

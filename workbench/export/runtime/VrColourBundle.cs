@@ -24,7 +24,7 @@ namespace VrColourWorkbench
     [Serializable] public class LightEntry { public string id; public string name; public int[] rgb8; public float[] linear; public float[] XYZ; public float Rf; public float CCT; public bool in_gamut; }
     [Serializable] public class LightTable { public string format; public int format_version; public LightEntry[] lights; }
     [Serializable] public class Correction { public int size; public float[] domain; public string file; }
-    [Serializable] public class DisplayInverse { public string format; public int format_version; public float[] thresholds; public Correction correction; }
+    [Serializable] public class DisplayInverse { public string format; public int format_version; public float[] thresholds; public float[] cells; public Correction correction; }
     [Serializable] public class CoefficientHeader { public string format; public int format_version; public string file; public int width; public int height; public int components; public int channels; public int layers; public int bytes; }
     [Serializable] public class Level2Light { public string id; public float[] matrix; public float[] offset; public int[] light_rgb8; public int[] texel_table; public int[] unreachable_dac; }
     [Serializable] public class Level2Lights { public int components; public int channels; public int layers; public Level2Light[] lights; }
@@ -43,6 +43,7 @@ namespace VrColourWorkbench
         public BundleManifest Manifest { get; private set; }
         public LightTable Lights { get; private set; }
         public Texture2D Thresholds { get; private set; }
+        public Texture2D Cells { get; private set; }
         public Texture3D DriveCorrection { get; private set; }
         public Vector4 CorrectionDomain { get; private set; }
         public int CorrectionSize { get; private set; }
@@ -64,6 +65,9 @@ namespace VrColourWorkbench
             if (inverse.thresholds == null || inverse.thresholds.Length != 3 * 255)
                 throw new BundleException(directory + ": display_inverse.json needs 765 thresholds");
             bundle.Thresholds = FloatTable(inverse.thresholds, 255);
+            if (inverse.cells == null || inverse.cells.Length % 3 != 0 || inverse.cells.Length == 0)
+                throw new BundleException(directory + ": display_inverse.json needs 3 rows of cells");
+            bundle.Cells = FloatTable(inverse.cells, inverse.cells.Length / 3);
             bundle.CorrectionSize = inverse.correction == null ? 0 : inverse.correction.size;
             if (bundle.CorrectionSize > 0)
             {
@@ -173,6 +177,7 @@ namespace VrColourWorkbench
             for (int i = 0; i < 768; ++i) texels[i] = light.texel_table[i];
             material.SetTexture("_VrCoefficients", LoadCoefficients(cube));
             material.SetTexture("_VrThresholds", Thresholds);
+            material.SetTexture("_VrCells", Cells);
             material.SetTexture("_VrTexelTable", FloatTable(texels, 256));
             if (DriveCorrection != null) material.SetTexture("_VrDriveCorrection", DriveCorrection);
             material.SetVectorArray("_VrMatrixRows", rows);

@@ -8,11 +8,12 @@
 //
 // Per texel: drive = matrix * channels + offset; optional drive correction (3D
 // table, trilinear); u = sqrt(clamp(drive, 0, 1)); DAC = number of the channel's
-// 255 thresholds <= u; texel = texel_table[channel][DAC].
+// 255 thresholds <= u (from a per-cell lower bound); texel = texel_table[channel][DAC].
 #define MAX_LAYERS 16
 
 uniform sampler2DArray coefficients;   // RGBA16F, layers = ceil(C / 4), from coefficients.bin
 uniform sampler2D thresholds;          // R32F, 255 x 3 (row = channel), display_inverse.json
+uniform sampler2D cells;               // R32F, 4096 x 3: lower bound of the DAC per cell of u
 uniform sampler2D texel_table;         // R32F, 256 x 3 (row = channel), values 0..255
 uniform sampler3D drive_correction;    // RGB32F, size^3, display_drive_correction.bin
 uniform int layers;
@@ -42,13 +43,11 @@ vec3 corrected(vec3 drive) {
 }
 
 int dac_level(int channel, float u) {
-    int low = 0, high = 255;  // answer: how many thresholds are <= u
-    while (low < high) {
-        int middle = (low + high + 1) / 2;
-        if (texelFetch(thresholds, ivec2(middle - 1, channel), 0).r <= u) low = middle;
-        else high = middle - 1;
-    }
-    return low;
+    // how many of the channel's thresholds are <= u: from the cell's lower bound, step up
+    int cell_count = textureSize(cells, 0).x;
+    int level = int(texelFetch(cells, ivec2(int(u * float(cell_count - 1)), channel), 0).r);
+    while (level < 255 && texelFetch(thresholds, ivec2(level, channel), 0).r <= u) ++level;
+    return level;
 }
 
 void main() {

@@ -16,7 +16,8 @@ Level 2, per texel (the shaders do the same):
 ``drive = matrix · channels + offset`` (3 × C, float32); where
 ``display_inverse.json`` names a correction table, ``drive = trilinear(table,
 (clamp(drive, lo, hi) − lo)/(hi − lo))``; ``u = sqrt(clamp(drive, 0, 1))``;
-``DAC_c = #{thresholds_c ≤ u_c}``; ``texel_c = texel_table[c][DAC_c]``;
+``DAC_c = #{thresholds_c ≤ u_c}`` (found from ``cells``, a lower bound per cell of ``u``,
+stepping up as the shaders do); ``texel_c = texel_table[c][DAC_c]``;
 unreachable where any ``DAC_c ≥ unreachable_dac[c]``.
 
 Every problem with a bundle is one line on standard error and exit status 2.
@@ -115,6 +116,11 @@ class Bundle:
         where = "display_inverse.json"
         document = read_json(self.folder / where)
         thresholds = numbers(document, "thresholds", 765, where).reshape(3, 255)
+        cells = document.get("cells")
+        count = len(cells) // 3 if isinstance(cells, list) else 0
+        if count < 2 or len(cells) != 3 * count:
+            raise BundleError(f"{where}: 'cells' must be a list of 3 rows of lower bounds")
+        cells = numbers(document, "cells", 3 * count, where, np.int64, 0, 255).reshape(3, count)
         correction = document.get("correction")
         if not isinstance(correction, dict):
             raise BundleError(f"{where}: 'correction' must be an object")
@@ -128,7 +134,7 @@ class Bundle:
             if not isinstance(name, str) or "/" in name or "\\" in name or not name:
                 raise BundleError(f"{where}: correction 'file' must be a file name in the bundle")
             table = read_floats(self.folder / name, size ** 3 * 3, "<f4").reshape(size, size, size, 3)
-        return thresholds, table, domain
+        return thresholds, cells, table, domain
 
     # level 2 ---------------------------------------------------------------------------
     def level2(self, name, light_id):
@@ -202,17 +208,27 @@ def level2_texture(bundle, name, light_id):
     """(H, W, 3) uint8 texels and the unreachable count (module doc)."""
     (width, height), planes, matrix, offset, texel_table, unreachable_dac = \
         bundle.level2(name, light_id)
-    thresholds, table, domain = bundle.display_inverse()
+    thresholds, cells, table, domain = bundle.display_inverse()
     drive = planes.astype(np.float32).T @ matrix.T + offset
     if table is not None:
         low, high = np.float32(domain[0]), np.float32(domain[1])
         drive = trilinear(table, (drive - low) / (high - low))
     u = np.sqrt(np.clip(drive, np.float32(0.0), np.float32(1.0))).astype(np.float32)
-    dac = np.stack([np.searchsorted(thresholds[c], u[:, c], side="right") for c in range(3)],
-                   axis=-1)
+    dac = np.stack([dac_level(thresholds[c], cells[c], u[:, c]) for c in range(3)], axis=-1)
     texels = texel_table[np.arange(3), dac].astype(np.uint8)
     unreachable = int(np.count_nonzero(np.any(dac >= unreachable_dac, axis=-1)))
     return texels.reshape(height, width, 3), unreachable
+
+
+def dac_level(thresholds, cells, u):
+    """How many of ``thresholds`` (255) are ≤ ``u``: from the cell's lower bound, step up."""
+    level = cells[(u * np.float32(len(cells) - 1)).astype(np.int64)]
+    padded = np.append(thresholds, np.float32(np.inf))
+    while True:
+        step = padded[level] <= u
+        if not np.any(step):
+            return level
+        level = level + step
 
 
 def read_cube(path):
