@@ -198,7 +198,10 @@ def parse_profile_text(text: str, source: str = "profile") -> "Profile":
                            "Export the profile again") from None
     except RecursionError:
         raise ProfileError(f"{source}: nested too deeply to be a profile") from None
-    return Profile.from_document(document, source)
+    try:
+        return Profile.from_document(document, source)
+    except RecursionError:
+        raise ProfileError(f"{source}: nested too deeply to be a profile") from None
 
 
 @dataclass(frozen=True, eq=False)
