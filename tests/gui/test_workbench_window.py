@@ -234,3 +234,66 @@ def test_the_log_dock_shows_instrument_traffic_at_debug_on_demand(qtbot, window)
     assert "(before)" not in dock.text.toPlainText()
     dock.traffic.setChecked(False)
     assert logging.getLogger("instruments.cs2000").getEffectiveLevel() > logging.DEBUG
+
+
+def test_the_tcp_connection_test_names_the_display_or_says_why_not(qtbot, window):
+    from instruments.headset import SimulatedHeadset
+    from instruments.patch_server import PatchServer
+
+    form = window.pages["calibrate"].form
+    form.display.setCurrentIndex(form.display.findData("tcp"))
+    with PatchServer(SimulatedHeadset().show, display_name="test headset", idle_timeout_s=5.0) as server:
+        server.start()
+        host, port = server.address
+        form.tcp.setText(f"{host}:{port}")
+        _click(qtbot, form.test_tcp)
+        qtbot.waitUntil(lambda: "connected: test headset" in form.tcp_status.text(), timeout=10_000)
+    form.tcp.setText(f"{host}:{port}")  # the server is gone now
+    _click(qtbot, form.test_tcp)
+    qtbot.waitUntil(lambda: "cannot connect" in form.tcp_status.text(), timeout=10_000)
+    form.tcp.setText("no-port-here")
+    _click(qtbot, form.test_tcp)
+    assert "is not HOST:PORT" in form.tcp_status.text()
+    form.stop_workers()
+
+
+def test_a_calibration_in_the_full_screen_patch_window_closes_it_at_the_end(qtbot, window, tmp_path):
+    calibrate = _configure(window, tmp_path / "run")
+    form = calibrate.form
+    form.display.setCurrentIndex(form.display.findData("window"))
+    form.screen.setCurrentIndex(0)
+    assert window.display_label.text() == "patch display: full-screen window on screen 0"
+    with qtbot.waitSignal(calibrate.session_loaded, timeout=RUN_TIMEOUT_MS):
+        _click(qtbot, calibrate.start_button)
+    assert calibrate._patch_window is None
+    journal = read_journal(tmp_path / "run" / JOURNAL_NAME)
+    assert "patch window" in journal.header.display and len(journal.ok_records()) == QUICK
+
+
+def test_identify_screens_numbers_every_screen_then_clears(qtbot, window):
+    from PySide6.QtGui import QGuiApplication
+
+    from workbench.gui.screen_overlay import identify_screens
+
+    shown = identify_screens(window, show_ms=100)
+    assert [w.index for w in shown] == list(range(len(QGuiApplication.screens())))
+    assert all(w.isVisible() for w in shown) and shown[0].text.startswith("0\n")
+    qtbot.waitUntil(lambda: not any(w.isVisible() for w in shown), timeout=5000)
+
+
+def test_the_layout_is_remembered_in_the_config_folder(qtbot, tmp_path):
+    settings = WindowSettings(tmp_path / "config")
+    first = MainWindow(Workspace(), settings)
+    qtbot.addWidget(first)
+    first.show()
+    qtbot.waitExposed(first)
+    assert not first.log_dock.isVisible()
+    first.log_dock.show()
+    first.shutdown()
+    assert settings.path.is_file() and settings.path.is_relative_to(tmp_path)
+    second = MainWindow(Workspace(), WindowSettings(tmp_path / "config"))
+    qtbot.addWidget(second)
+    second.show()
+    qtbot.waitExposed(second)
+    assert second.log_dock.isVisible()  # the dock layout came back
+    second.shutdown()

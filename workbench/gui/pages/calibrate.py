@@ -96,6 +96,7 @@ class CalibratePage(QWidget):
         self._patch_window = None
         self._white_XYZ = None
         self._setup: CalibrationSetup | None = None
+        self._active = False
 
         self.form = CalibrationForm()
         form_scroll = QScrollArea()
@@ -157,7 +158,8 @@ class CalibratePage(QWidget):
     # -- controls -----------------------------------------------------------------------
     @property
     def running(self) -> bool:
-        return self.worker is not None and self.worker.isRunning()
+        """Whether a run is going: from :meth:`start` until the page has handled its worker's end."""
+        return self._active
 
     def _update_start_label(self) -> None:
         try:
@@ -203,6 +205,7 @@ class CalibratePage(QWidget):
         self.workspace.set_measurement(status="running", instrument=setup.describe_instrument(),
                                        display=setup.describe_display(), out_dir=setup.out_dir,
                                        done=0, total=len(plan), message="")
+        self._active = True
         self._set_running(True)
         self.worker.start()
 
@@ -218,7 +221,7 @@ class CalibratePage(QWidget):
         return _WindowPatchDisplay(QtPatchDisplay(self._patch_window, 10.0))
 
     def toggle_pause(self) -> None:
-        if not self.running:
+        if not self.running or self.worker is None:
             return
         if self.pause_button.text() == "Pause":
             self.worker.pause()
@@ -229,7 +232,7 @@ class CalibratePage(QWidget):
             self.pause_button.setText("Pause")
 
     def cancel(self) -> None:
-        if self.running:
+        if self.running and self.worker is not None:
             self.worker.cancel()
 
     def remeasure(self, indices: list) -> None:
@@ -321,6 +324,7 @@ class CalibratePage(QWidget):
             self._load_session()
 
     def _on_worker_finished(self) -> None:
+        self._active = False
         self._close_patch_window()
         self._set_running(False)
         self._update_start_label()
