@@ -71,3 +71,21 @@ def test_a_ti3_whose_number_of_sets_disagrees_with_its_rows_is_refused(tmp_path)
                                                 rf"first data table holds {count}"):
         read_session(edited)
     assert len(read_session(path)) == count
+
+
+def test_noise_model_is_not_fooled_by_heavy_tails_or_a_wandering_display():
+    """Student-t noise is estimated without the bias of a plain median; a display that wanders
+    over minutes inflates the whole scatter, not the repeatability (points measured in turn)."""
+    from tests.diagnostics.independent_generator import generate_session
+    from workbench.diagnostics.noise import estimate_noise
+
+    ratios = []
+    for seed in range(12):
+        generated = generate_session({}, seed=seed)
+        model = estimate_noise(generated.session.without("validation"))
+        ratios.append(model.relative_sd_at(1.0) / (generated.noise * np.sqrt(1.1)))
+    assert 0.85 < np.median(ratios) < 1.2
+    wandering = generate_session({"temporal-drift": "wander"}, seed=7, noise=0.001)
+    model = estimate_noise(wandering.session.without("validation"))
+    assert model.relative_sd_at(1.0) < 0.0015
+    assert model.dof > 10 and model.source == "sweep scatter"

@@ -90,6 +90,9 @@ INTERACTION_EXPONENTS = (0.5, 1.0, 2.0, 3.0)
 
 DEFAULT_INTERACTION_EXPONENT = 2.0
 
+MAX_INTERACTION_AMOUNT = 0.95
+"""Per-channel amounts are clipped to ±this (the profile schema allows (−1, 1))."""
+
 
 def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
     """Per-channel co-drive gains: ``a_c`` from the white, ``p`` (and ``a_c``) from the greys.
@@ -135,6 +138,9 @@ def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
                 if best is None or rss < best[0]:
                     best = (rss, p, solution)
             _, exponent, amounts = best
+    # a channel that loses all its light (or doubles it) at white is no interaction but bad data;
+    # the profile schema bounds each amount to (−1, 1)
+    amounts = np.clip(amounts, -MAX_INTERACTION_AMOUNT, MAX_INTERACTION_AMOUNT)
     return ChannelInteraction(amount=amount, amounts=tuple(float(a) for a in amounts),
                               exponent=float(exponent))
 
