@@ -5,6 +5,7 @@ import logging
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytest.importorskip("PySide6")
@@ -297,3 +298,31 @@ def test_the_layout_is_remembered_in_the_config_folder(qtbot, tmp_path):
     qtbot.waitExposed(second)
     assert second.log_dock.isVisible()  # the dock layout came back
     second.shutdown()
+
+
+@pytest.mark.slow
+def test_gui_screenshot_renders_every_page_after_a_simulated_calibration(tmp_path):
+    import subprocess
+    import sys
+
+    from PIL import Image
+
+    result = subprocess.run([sys.executable, "-m", "workbench", "gui", "--screenshot", str(tmp_path / "shots"),
+                             "--simulate"], capture_output=True, text=True, timeout=300,
+                            env={**os.environ, "VR_WORKBENCH_CONFIG_DIR": str(tmp_path / "config")})
+    assert result.returncode == 0, result.stderr[-2000:]
+    for key, *_ in PAGES:
+        image = Image.open(tmp_path / "shots" / f"{key}.png")
+        assert image.width >= 800 and image.height >= 500
+        grey = np.asarray(image.convert("L").resize((64, 40)))
+        assert len(np.unique(grey)) > 8  # not one flat colour
+
+
+def test_the_gui_and_bench_gui_commands_are_registered():
+    from workbench.cli import build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["gui", "--simulate", "--screenshot", "out", "session.csv"])
+    assert (args.simulate, args.screenshot, args.file) == (True, "out", "session.csv")
+    args = parser.parse_args(["bench", "gui", "--json", "--plan", "paper"])
+    assert args.json and args.plan == "paper" and args.time_scale == 0.01

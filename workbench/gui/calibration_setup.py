@@ -37,7 +37,7 @@ from workbench.measurement.runner import JOURNAL_NAME, MeasurementRun
 from workbench.measurement.simulation import modelled_plan_duration_s, open_simulated_instrument
 
 __all__ = ["SIMULATED", "DISPLAY_KINDS", "CalibrationSetup", "PlanEstimate", "plan_estimate",
-           "cs2000_ports", "planned", "open_run", "test_tcp_display"]
+           "cs2000_ports", "planned", "open_run", "check_tcp_display"]
 
 SIMULATED = "simulated"
 """The instrument (and display) name of the simulation."""
@@ -181,7 +181,7 @@ def cs2000_ports() -> list:
     return find_cs2000_ports()
 
 
-def test_tcp_display(host: str, port: int, timeout_s: float = 3.0) -> str:
+def check_tcp_display(host: str, port: int, timeout_s: float = 3.0) -> str:
     """Connect to a patch server, say hello and disconnect; returns the display it names.
 
     Raises
@@ -194,9 +194,6 @@ def test_tcp_display(host: str, port: int, timeout_s: float = 3.0) -> str:
             return display.display_name or f"tcp:{host}:{port}"
     except PatchDisplayError as error:
         raise WorkbenchError(str(error)) from None
-
-
-test_tcp_display.__test__ = False  # not a pytest test, whatever its name
 
 
 def planned(setup: CalibrationSetup) -> tuple:

@@ -37,7 +37,7 @@ from workbench.gui.calibration_setup import (
     CalibrationSetup,
     cs2000_ports,
     plan_estimate,
-    test_tcp_display,
+    check_tcp_display,
 )
 from workbench.gui.screen_overlay import identify_screens
 from workbench.gui.workers import CallWorker
@@ -229,7 +229,7 @@ class CalibrationForm(QWidget):
             self.tcp_status.setText(f"✗ {error}")
             return
         self.tcp_status.setText(f"connecting to {host}:{port}…")
-        worker = CallWorker(lambda: test_tcp_display(host, port))
+        worker = CallWorker(lambda: check_tcp_display(host, port))
         worker.done.connect(lambda name: self.tcp_status.setText(f"✓ connected: {name}"))
         worker.failed.connect(lambda message: self.tcp_status.setText(f"✗ {message}"))
         worker.finished.connect(lambda: self._workers.remove(worker))
