@@ -5,10 +5,7 @@ from __future__ import annotations
 import json
 import sys
 
-from tqdm import tqdm
-
 from workbench.colorimetry import DEFAULT_K
-from workbench.reproduction import reproduce
 
 __all__ = ["register", "print_reproduction"]
 
@@ -24,6 +21,11 @@ def register(subparsers) -> None:
 
 
 def _run(args) -> int:
+    # imported here, not at module level: every CLI start-up imports this module
+    from tqdm import tqdm
+
+    from workbench.reproduction import reproduce
+
     with tqdm(total=0, desc="illuminant library", unit="source", file=sys.stderr,
               disable=not sys.stderr.isatty(), leave=False) as bar:
         def progress(done, total):
