@@ -124,3 +124,36 @@ def run_spirv_cross_glsl(ctx, vertex: str, fragment: str, inputs: dict) -> np.nd
         buffer.bind_to_uniform_block(0)
 
     return _draw(ctx, program, inputs, bind)
+
+
+def main(argv=None) -> int:
+    """Run in its own process (an EGL context in the pytest process upsets VTK's later ones):
+    ``glsl_runner.py BUNDLE CUBE OUT.npz --mode glsl|spirv --fragment F --vertex V --lights A,B``.
+    Exit status 3 and the reason on stderr when there is no OpenGL 4.3 context."""
+    import argparse
+    import sys
+
+    parser = argparse.ArgumentParser()
+    parser.add_argument("bundle", type=Path)
+    parser.add_argument("cube")
+    parser.add_argument("out")
+    parser.add_argument("--mode", choices=("glsl", "spirv"), required=True)
+    parser.add_argument("--fragment", type=Path, required=True)
+    parser.add_argument("--vertex", type=Path, required=True)
+    parser.add_argument("--lights", required=True)
+    args = parser.parse_args(argv)
+    context, why = gl_context()
+    if context is None:
+        print(why, file=sys.stderr)
+        return 3
+    run = run_glsl if args.mode == "glsl" else run_spirv_cross_glsl
+    vertex, fragment = args.vertex.read_text(), args.fragment.read_text()
+    results = {light: run(context, vertex, fragment, level2_inputs(args.bundle, args.cube, light))
+               for light in args.lights.split(",")}
+    np.savez(args.out, **results)
+    context.release()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
