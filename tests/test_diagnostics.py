@@ -37,11 +37,30 @@ def test_every_vocabulary_effect_has_a_detector():
 def test_hidden_effect_is_named_first_with_a_heldout_gain(effect, seed):
     rng = np.random.default_rng([seed, EFFECTS.index(effect)])
     magnitude = random_effect_magnitude(effect, rng)
-    diagnosis = diagnose(simulate_session({effect: magnitude}, seed=seed))
+    # an interaction's partial-drive shape needs greys among the fit rows (the paper plan's
+    # only mixture is white): measured with them, it is named and modelled
+    plan = "paper+greys" if effect == "channel-interaction" else "paper"
+    diagnosis = diagnose(simulate_session({effect: magnitude}, seed=seed, plan=plan))
     names = [f.effect for f in diagnosis.findings]
     assert names and names[0] == effect, (magnitude, names)
     assert diagnosis.gain_pct >= 30, (magnitude, diagnosis.gain_pct)
     assert diagnosis.protocol == "holdout"
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_an_interaction_the_paper_plan_cannot_shape_is_named_and_costs_nothing(seed):
+    from workbench.diagnostics.extension import DEFAULT_INTERACTION_EXPONENT
+
+    rng = np.random.default_rng([seed, EFFECTS.index("channel-interaction")])
+    magnitude = random_effect_magnitude("channel-interaction", rng)
+    diagnosis = diagnose(simulate_session({"channel-interaction": magnitude}, seed=seed))
+    assert diagnosis.findings[0].effect == "channel-interaction"
+    # white is the plan's only mixture: the term takes the most conservative shape and says so
+    assert diagnosis.extended.interaction.exponent == DEFAULT_INTERACTION_EXPONENT
+    term = next(t for t in diagnosis.to_json()["extended"]["terms"]
+                if t["effect"] == "channel-interaction")
+    assert "not identified" in term["fitted_on"]
+    assert diagnosis.gain_pct >= 0
 
 
 @pytest.mark.slow
@@ -93,7 +112,8 @@ def test_real_lcd_ti3_files(name):
     assert fallback["validation"]["mean_dE00"] < diagnosis.baseline_score.mean_dE00
     # the attribution separates what the black term buys from better use of the same rows
     attribution = document["attribution"]
-    assert {t["effect"] for t in attribution["terms"]} == found
+    assert {t["effect"] for t in attribution["terms"]} == {f.effect for f in diagnosis.findings
+                                                           if f.in_model}
     black = next(t for t in attribution["terms"] if t["effect"] == "black-offset")
     assert black["contribution_dE00"] > 0.05
     assert attribution["no_terms_refit"]["mean_dE00"] < diagnosis.baseline_score.mean_dE00
@@ -244,10 +264,11 @@ def test_diagnose_benchmark_reports_its_fields():
 def test_an_interaction_of_another_form_is_still_named_with_a_gain(seed):
     """The simulated headset limits power exactly as the extension models it (mean drive,
     knee at one full channel); here the limit follows the luminance-weighted load with its
-    knee at half of white instead, so the extension's form is only an approximation."""
+    knee at half of white instead, so the extension's form is only an approximation. Measured
+    with greys and partial-drive mixtures (``paper+greys``), so the shape can be fitted."""
     from workbench.session import Session
 
-    clean = simulate_session(None, seed=seed)
+    clean = simulate_session(None, seed=seed, plan="paper+greys")
     load = clean.XYZ[:, 1] / clean.white_XYZ[1]
     limited = clean.XYZ * (1 - 0.12 * np.clip((load - 0.5) / 0.5, 0, 1))[:, None]
     session = Session(kind=clean.kind, rgb=clean.rgb, XYZ=limited, t_s=clean.t_s,

@@ -196,6 +196,9 @@ def build_context(fit_session: Session, drift_found: bool | None = None,
     if drift_found is None:
         test = detect_temporal_drift_raw(drift, time_basis, noise)
         drift_found = test.testable and test.p_value <= critical_p(len(DETECTORS))
+    if drift is not None and drift_found:
+        # the correction follows the references only as far as they rise above their noise
+        drift = drift.smoothed_to_noise(noise.sd_Y(drift.luminances) / drift.luminances)
     corrected = drift.correct(fit_session) if (drift is not None and drift_found) else fit_session
     blacks = np.all(corrected.rgb <= 0, axis=1) & ~copies
     black = corrected.XYZ[blacks].mean(axis=0) if blacks.any() else np.zeros(3)

@@ -35,15 +35,47 @@ class DriftCorrection:
     references and held flat beyond them; the reference state is the mean of
     the last two references (a warmed-up display). ``times`` are seconds, or
     row numbers where the session has no times (the rows of a ``.ti3`` are in
-    measurement order).
+    measurement order). ``gains`` are the references as measured (the drift
+    test reads them); ``smoothed``, where set (:meth:`smoothed_to_noise`),
+    is the curve ``g`` interpolates, so a reference's own noise is not
+    copied into every row measured near it.
     """
 
     times: np.ndarray
     gains: np.ndarray
     luminances: np.ndarray
+    smoothed: np.ndarray | None = None
 
     def gain(self, t_s) -> np.ndarray:
-        return np.interp(np.asarray(t_s, dtype=float), self.times, self.gains)
+        curve = self.gains if self.smoothed is None else self.smoothed
+        return np.interp(np.asarray(t_s, dtype=float), self.times, curve)
+
+    def smoothed_to_noise(self, relative_sd: np.ndarray) -> "DriftCorrection":
+        """The correction with its curve smoothed as far as the references' noise allows.
+
+        A Whittaker smoother (second differences over the reference order)
+        whose strength is the largest of a grid for which the references'
+        χ² about the curve stays at or below its expectation (mean squared
+        standardized residual ≤ 1, the discrepancy principle): a trend,
+        step or wander well above noise keeps its shape, while ±σ jitter
+        between neighbouring references is averaged out.
+        """
+        sd = np.broadcast_to(np.asarray(relative_sd, dtype=float), self.gains.shape)
+        n = self.gains.size
+        if n < 3 or not np.all(sd > 0):
+            return self
+        weight = np.diag(1.0 / sd ** 2)
+        second = np.diff(np.eye(n), 2, axis=0)
+        penalty = second.T @ second
+        best = self.gains
+        for strength in np.logspace(-6, 2, 33):
+            curve = np.linalg.solve(weight + strength / np.mean(sd) ** 2 * penalty,
+                                    weight @ self.gains)
+            if np.mean(((curve - self.gains) / sd) ** 2) > 1.0:
+                break
+            best = curve
+        return DriftCorrection(times=self.times, gains=self.gains, luminances=self.luminances,
+                               smoothed=best)
 
     def correct(self, session: Session) -> Session:
         """The session with every measurement divided by ``g(t)``."""

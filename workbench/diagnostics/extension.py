@@ -24,7 +24,8 @@ from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift,
 from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
 from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_tone_curve
 
-__all__ = ["TERMS", "PARAMETRIC_TONE_FORMS", "fitted_on", "fit_extended",
+__all__ = ["TERMS", "TONE_CHANGING_EFFECTS", "PARAMETRIC_TONE_FORMS",
+           "DEFAULT_INTERACTION_EXPONENT", "MATERIALITY_INTERACTION_EXPONENT", "fitted_on", "fit_extended",
            "grey_channel_outputs"]
 
 TERMS = {
@@ -48,7 +49,10 @@ def fitted_on(effect: str, session) -> str:
         "tone-curve-shape": f"the {sweeps} sweep points" + (f" and {n_grey} greys" if n_grey else ""),
         "chromaticity-shift": f"the chromaticity of the {sweeps} sweep points",
         "channel-interaction": f"the {n_white} white references against the full-drive primaries"
-                               + (f", its shape on the {n_grey} greys" if n_grey >= 5 else ""),
+                               + (f", its shape on the {n_grey} greys" if n_grey >= 5 else
+                                  "; its partial-drive shape is not identified without greys, so "
+                                  "the most conservative one (co-drive exponent "
+                                  f"{DEFAULT_INTERACTION_EXPONENT:g}: white and colours near it)"),
     }[effect]
 
 
@@ -85,20 +89,34 @@ def _chromaticity_term(sweep: ChannelSweep) -> ChromaticityDrift | None:
     return ChromaticityDrift(tuple(tuple(float(v) for v in row) for row in fit[0]))
 
 
-INTERACTION_EXPONENTS = (0.5, 1.0, 2.0, 3.0)
+INTERACTION_EXPONENTS = (0.5, 1.0, 2.0, 3.0, 5.0, 8.0)
 """Co-drive exponents ``p`` tried on the greys; :data:`DEFAULT_INTERACTION_EXPONENT` without greys."""
 
-DEFAULT_INTERACTION_EXPONENT = 2.0
+DEFAULT_INTERACTION_EXPONENT = 8.0
+"""``p`` where the fit rows cannot identify the shape (fewer than five greys above 10 % drive:
+the paper's plan, whose only mixture is white). The white fixes the amounts but says nothing
+about partial drive, where backlights, crosstalk and power limits differ by a factor of ten
+(``p`` from 0.5 to 8 spans them); the most conservative shape is taken: the largest ``p`` the
+profile schema allows, which corrects white and the colours near it and leaves partial-drive
+mixtures at the additive prediction. ``unexplained-residual`` says what would identify it."""
+
+MATERIALITY_INTERACTION_EXPONENT = 2.0
+"""``p`` an unidentified interaction's impact on the fixed colours is judged with: the geometric
+middle of the shapes real displays span (0.5 to 8). Naming asks whether the effect matters to
+colours, and the conservative shape would call every interaction immaterial by construction;
+the model term keeps the conservative shape, since it must not cost held-out accuracy."""
 
 MAX_INTERACTION_AMOUNT = 0.95
 """Per-channel amounts are clipped to ±this (the profile schema allows (−1, 1))."""
 
 
-def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
+def _interaction_term(context: DiagnosisContext, default_exponent: float = DEFAULT_INTERACTION_EXPONENT
+                      ) -> ChannelInteraction:
     """Per-channel co-drive gains: ``a_c`` from the white, ``p`` (and ``a_c``) from the greys.
 
     Without greys, ``W − K = Σ_c (1 − a_c) P_c`` in X, Y and Z gives the three
-    ``a_c`` exactly and ``p`` is :data:`DEFAULT_INTERACTION_EXPONENT`. Where
+    ``a_c`` exactly and ``p`` is :data:`DEFAULT_INTERACTION_EXPONENT` (the
+    most conservative shape: the partial-drive shape is not identified). Where
     the fit rows hold at least five greys above 10 % drive, ``a_c`` are the
     least-squares solution over the white and the greys (relative error in
     X, Y, Z; channel outputs from the sweeps: through their points where a
@@ -111,7 +129,7 @@ def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
     amounts = 1.0 - np.linalg.solve(matrix, white)
     summed = matrix.sum(axis=1)
     amount = float(1.0 - white[1] / summed[1])
-    exponent = DEFAULT_INTERACTION_EXPONENT
+    exponent = default_exponent
     greys = _grey_rows(context.fit) & ~context.copies
     drive = context.fit.rgb[greys, 0] / 255.0
     keep = drive > 0.1
@@ -145,28 +163,41 @@ def _interaction_term(context: DiagnosisContext) -> ChannelInteraction:
                               exponent=float(exponent))
 
 
+TONE_CHANGING_EFFECTS = frozenset({"tone-curve-shape", "black-offset", "temporal-drift"})
+"""Effects whose terms change the sweeps' luminance data (the shape itself, the black under it,
+the drift correction); without any of them (and without greys) the extension keeps the
+baseline's power laws."""
+
 PARAMETRIC_TONE_FORMS = ("power", "gog", "extended-power")
 """Tone forms without the spline (whose leave-one-out score is the costly part of the choice)."""
 
 
 def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=None,
-                 tone_candidates=("power", "gog", "extended-power", "spline")) -> ExtendedDisplay:
+                 tone_candidates=("power", "gog", "extended-power", "spline"),
+                 interaction_exponent: float = DEFAULT_INTERACTION_EXPONENT) -> ExtendedDisplay:
     """The extended model with the terms for ``effects`` (ids of found effects).
 
     Where a channel has fewer than three sweep points (published primaries
     only), its tone curve is the ``baseline``'s power law. ``tone_forms``
     (one form per channel) skips the choice of form by BIC and refits those
     forms: the cross-validation folds refit the chosen model, not a new choice;
-    ``tone_candidates`` are the forms the BIC chooses among otherwise.
+    ``tone_candidates`` are the forms the BIC chooses among otherwise;
+    ``interaction_exponent`` is the co-drive ``p`` where the greys cannot
+    choose it (:data:`MATERIALITY_INTERACTION_EXPONENT` to judge materiality).
     """
     effects = set(effects)
-    interaction = _interaction_term(context) if "channel-interaction" in effects else None
+    interaction = (_interaction_term(context, interaction_exponent)
+                   if "channel-interaction" in effects else None)
     greys = grey_channel_outputs(context, interaction)
     tone = []
     for sweep in context.sweeps:
         extra = None if greys is None else (greys[0], greys[1][:, sweep.channel])
         drive, output = tone_data(sweep, extra)
-        if drive.size < 3 and baseline is not None:
+        if baseline is not None and (drive.size < 3 or (
+                greys is None and not effects & TONE_CHANGING_EFFECTS)):
+            # no term that changes the sweeps' luminance: the paper's power law as the baseline
+            # fitted it, so a term changes only what it answers (level-dependent primaries move
+            # xy at constant Y; an interaction without greys leaves the sweeps alone)
             curve = PowerCurve(float(baseline.gamma[sweep.channel]))
         elif "tone-curve-shape" in effects and tone_forms is not None:
             curve = fit_tone_curve(drive, output, tone_forms[sweep.channel])

@@ -31,6 +31,7 @@ from workbench.diagnostics.detectors import (
 )
 from workbench.diagnostics.cross_validation import select_terms
 from workbench.diagnostics.extension import (
+    MATERIALITY_INTERACTION_EXPONENT,
     PARAMETRIC_TONE_FORMS,
     TERMS,
     fit_extended,
@@ -273,7 +274,9 @@ def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None
     significant = [r.effect for r in results if r.significant]
     if not significant:
         return results
-    full = fit_extended(context, significant, baseline, tone_forms)
+    # an interaction whose shape the fit rows cannot identify is judged at the middle shape
+    full = fit_extended(context, significant, baseline, tone_forms,
+                        interaction_exponent=MATERIALITY_INTERACTION_EXPONENT)
     white = context.white
     predicted = full.forward(FIXED_COLOURS)
     out = []
@@ -287,7 +290,8 @@ def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None
                                                 white)
         else:
             without = fit_extended(context, [e for e in significant if e != result.effect],
-                                   baseline, tone_forms)
+                                   baseline, tone_forms,
+                                   interaction_exponent=MATERIALITY_INTERACTION_EXPONENT)
             impact = mean_dE00_on_fixed_colours(predicted, without.forward(FIXED_COLOURS), white)
         out.append(replace(result, impact_dE00=impact,
                            found=bool(impact >= MATERIALITY_FLOOR_DE00)))

@@ -30,6 +30,14 @@ Built-in plans
     ``paper`` followed by the ``apl`` block: 244 patches, 69.3 min of
     modelled CS-2000 time on the clean simulated headset (the ``paper``
     part's dark patches dominate).
+``paper+greys``
+    ``paper`` with, before the validation colours, a grey ramp
+    (:data:`GREY_LEVELS`, kind ``grey``) and the partial-drive mixtures of a
+    3 × 3 × 3 cube of :data:`MIXTURE_LEVELS` other than its greys (kind
+    ``mixture``): the fit rows then show how the channels combine below full
+    drive, which the paper's plan (whose only mixture is white) cannot; the
+    diagnosis fits a channel interaction's shape on the greys and
+    cross-validates it on the mixtures. 254 patches.
 """
 
 from __future__ import annotations
@@ -52,6 +60,9 @@ __all__ = [
     "apl_block",
     "measurement_plan_apl",
     "measurement_plan_paper_apl",
+    "measurement_plan_paper_greys",
+    "GREY_LEVELS",
+    "MIXTURE_LEVELS",
     "Patch",
     "MeasurementPlan",
     "DRIFT_REFERENCE_INTERVAL",
@@ -73,6 +84,13 @@ APL_SMALL_WINDOW = 0.03
 
 APL_SURROUNDS = (32, 64, 128, 192, 255)
 """Grey surround levels (DAC) of the ``apl`` plan's small-window patches."""
+
+GREY_LEVELS = tuple(range(16, 241, 16))
+"""DAC levels of the ``paper+greys`` plan's grey ramp (15 greys, 6 % to 94 % drive)."""
+
+MIXTURE_LEVELS = (64, 128, 192)
+"""Per-channel DAC levels of the ``paper+greys`` plan's partial-drive mixtures (a 3 × 3 × 3
+cube without its 3 greys: 24 mixtures)."""
 
 APL_REFERENCE_INTERVAL = 6
 """The ``apl`` plan shows a full-field white after this many APL patches."""
@@ -247,11 +265,35 @@ def measurement_plan_paper_apl(seed: int) -> MeasurementPlan:
     return MeasurementPlan("paper+apl", paper + block[1:], seed)
 
 
+def measurement_plan_paper_greys(seed: int) -> MeasurementPlan:
+    """The paper's plan with a grey ramp and partial-drive mixtures among the fit rows.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the validation colours (the same colours as ``paper`` with this seed).
+
+    Returns
+    -------
+    MeasurementPlan
+        254 patches: 1 black, 1 + 10 whites, 3 × 51 ramp levels, 15 greys
+        (:data:`GREY_LEVELS`), 24 mixtures (:data:`MIXTURE_LEVELS`), 50
+        validation colours, in that order with the drift references between.
+    """
+    greys = [Patch("grey", (level,) * 3) for level in GREY_LEVELS]
+    mixtures = [Patch("mixture", (r, g, b)) for r in MIXTURE_LEVELS for g in MIXTURE_LEVELS
+                for b in MIXTURE_LEVELS if not r == g == b]
+    patches = [Patch("black", _BLACK), Patch("white", _WHITE), *_ramps(range(5, 256, 5)),
+               *greys, *mixtures, *_validation(50, seed)]
+    return MeasurementPlan("paper+greys", _with_drift_references(patches), seed)
+
+
 MEASUREMENT_PLANS = {
     "paper": measurement_plan_paper,
     "quick": measurement_plan_quick,
     "apl": measurement_plan_apl,
     "paper+apl": measurement_plan_paper_apl,
+    "paper+greys": measurement_plan_paper_greys,
 }
 """Built-in plans by name: each a function of the validation seed."""
 
