@@ -1,6 +1,7 @@
 """The workbench window, clicked through as a user would: calibrate (simulated), pause, cancel and resume,
 an instrument error and its re-measurement, re-measuring a finished patch, opening a real .ti3, exporting."""
 
+import gc
 import logging
 import os
 from pathlib import Path
@@ -39,13 +40,23 @@ def _config_in_tmp(tmp_path, monkeypatch):
     monkeypatch.setenv("VR_WORKBENCH_CONFIG_DIR", str(tmp_path / "config"))
 
 
+def _dispose(window) -> None:
+    """Stop the window's threads, delete it and collect its wrappers now, not in a later test."""
+    from PySide6.QtWidgets import QApplication
+
+    window.shutdown()
+    window.close()
+    window.deleteLater()
+    QApplication.processEvents()
+    gc.collect()
+
+
 @pytest.fixture
 def window(qtbot, tmp_path):
     window = MainWindow(Workspace(), WindowSettings(tmp_path / "config"))
-    qtbot.addWidget(window)
     window.show()
     yield window
-    window.shutdown()
+    _dispose(window)
 
 
 def _configure(window, out_dir, *, time_scale=0.0, seed=11, plan="quick"):
@@ -285,19 +296,17 @@ def test_identify_screens_numbers_every_screen_then_clears(qtbot, window):
 def test_the_layout_is_remembered_in_the_config_folder(qtbot, tmp_path):
     settings = WindowSettings(tmp_path / "config")
     first = MainWindow(Workspace(), settings)
-    qtbot.addWidget(first)
     first.show()
     qtbot.waitExposed(first)
     assert not first.log_dock.isVisible()
     first.log_dock.show()
-    first.shutdown()
+    _dispose(first)
     assert settings.path.is_file() and settings.path.is_relative_to(tmp_path)
     second = MainWindow(Workspace(), WindowSettings(tmp_path / "config"))
-    qtbot.addWidget(second)
     second.show()
     qtbot.waitExposed(second)
     assert second.log_dock.isVisible()  # the dock layout came back
-    second.shutdown()
+    _dispose(second)
 
 
 @pytest.mark.slow

@@ -46,6 +46,9 @@ class FindingCards(QScrollArea):
         self._set_body(QLabel("No diagnosis yet: calibrate, or open a session (File ▸ Open)."))
 
     def _set_body(self, *widgets) -> None:
+        old = self.takeWidget()  # deleted by Qt now, not whenever Python collects it
+        if old is not None:
+            old.deleteLater()
         body = QWidget()
         layout = QVBoxLayout(body)
         for widget in widgets:
