@@ -67,6 +67,8 @@ class GeneratedSession:
     session: Session
     effects: dict = field(default_factory=dict)  # effect → (form, magnitude)
     noise: float = 0.0
+    true_XYZ: np.ndarray | None = None  # noiseless, effects on, at each row's time
+    effect_free_XYZ: np.ndarray | None = None  # noiseless, no effect
 
 
 def _unit(xy) -> np.ndarray:
@@ -215,8 +217,8 @@ def _hide(display: _Display, effect: str, form: str, rng: np.random.Generator) -
 
 
 def generate_session(effects: dict | None = None, seed: int = 0,
-                     noise: float | None = None) -> GeneratedSession:
-    """The ``paper`` plan measured on an independent display with ``effects`` hidden.
+                     noise: float | None = None, plan: str = "paper") -> GeneratedSession:
+    """A plan (``paper`` unless told) measured on an independent display with ``effects`` hidden.
 
     Parameters
     ----------
@@ -226,6 +228,14 @@ def generate_session(effects: dict | None = None, seed: int = 0,
         Seeds the display, the magnitudes, the plan's validation colours and the noise.
     noise : float, optional
         Relative gain noise ``a``; drawn from 0.05–0.5 % when None.
+    plan : str
+        The built-in measurement plan measured (``paper+greys`` adds greys and
+        partial-drive mixtures to the fit rows).
+
+    The result also holds the noiseless truth (``true_XYZ``: the display with
+    its effects, at each row's time) and ``effect_free_XYZ`` (the same display
+    with no effect: the paper's model exactly), so a suite can tell how much
+    each session's effects change the colours it holds out.
     """
     rng = np.random.default_rng([seed, 90411])
     display = _Display(rng)
@@ -235,7 +245,7 @@ def generate_session(effects: dict | None = None, seed: int = 0,
             raise ValueError(f"{effect} has no form {form!r}; use one of {FORMS[effect]}")
         hidden[effect] = (form, _hide(display, effect, form, rng))
     a = float(rng.uniform(0.0005, 0.005)) if noise is None else float(noise)
-    plan = measurement_plan("paper", seed)
+    plan = measurement_plan(plan, seed)
     rgb = np.array([patch.rgb for patch in plan.patches], dtype=float)
     kinds = np.array([patch.kind for patch in plan.patches], dtype=object)
     # the clock: 4 s a patch, up to 40 s more for dark ones (a longer integration)
@@ -248,6 +258,8 @@ def generate_session(effects: dict | None = None, seed: int = 0,
     t = np.cumsum(durations)
     display.session_s = float(t[-1])
     XYZ = display.XYZ(rgb, t)
+    effect_free = _Display(np.random.default_rng([seed, 90411]))  # the same draws, no effect
+    effect_free_XYZ = effect_free.XYZ(rgb, t)
     gain = a * rng.standard_t(6, len(rgb)) / np.sqrt(6 / 4)
     per_coordinate = 0.3 * a * rng.standard_normal((len(rgb), 3))
     floor = rng.uniform(2e-5, 1e-4) * display.white_Y
@@ -259,4 +271,5 @@ def generate_session(effects: dict | None = None, seed: int = 0,
                              + (", ".join(f"{e} ({f})" for e, (f, _) in hidden.items()) or "clean"),
                       metadata={"generator": "independent", "effects": {e: f for e, (f, _) in
                                                                        hidden.items()}})
-    return GeneratedSession(session=session, effects=hidden, noise=a)
+    return GeneratedSession(session=session, effects=hidden, noise=a, true_XYZ=XYZ,
+                            effect_free_XYZ=effect_free_XYZ)

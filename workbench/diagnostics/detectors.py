@@ -30,10 +30,11 @@ paper's model holds for this effect":
     four slopes; the smallest p times 3 channels. Statistic: the fitted xy
     distance at the lowest usable level.
 ``tone-curve-shape``
-    per channel, ``K + k·d^γ`` against ``K + k·f(d)`` with ``f`` GOG or
-    extended power (one more parameter each), weighted by the noise model,
-    black rows at ``d = 0``: F-test of the extra parameter; the smallest p
-    times 2 forms times the channels tested. A channel whose sweep is too
+    per channel, ``K + k·d^γ`` against ``K + k·f(d)`` with ``f`` GOG,
+    extended power (one more parameter each) or the power law plus two sine
+    harmonics of drive (two more: an S or a bump), weighted by the noise
+    model, black rows at ``d = 0``: F-test of the extra parameters; the
+    smallest p times 3 forms times the channels tested. A channel whose sweep is too
     short (a DisplayCAL ``.ti3`` has 4 levels) is tested on its sweep and the
     channel outputs the greys imply, in normalized output. Statistic: the largest gap
     between the two fitted curves, in normalized output.
@@ -427,11 +428,21 @@ def _shape(form: str, d: np.ndarray, p: np.ndarray) -> np.ndarray:
     if form == "gog":
         return np.maximum(0.0, (1 - p[1]) * d + p[1]) ** p[0]
     safe = np.maximum(d, 1e-6)
+    if form == "power-harmonic":
+        return safe ** p[0] + p[1] * np.sin(np.pi * d) + p[2] * np.sin(2 * np.pi * d)
     return np.where(d > 0, safe ** (p[0] + p[1] * np.log(safe)), 0.0)
 
 
 _SHAPE_START = {"power": ([2.2], [0.2], [8.0]), "gog": ([2.2, 0.0], [0.2, -0.5], [8.0, 0.5]),
-                "extended-power": ([2.2, 0.0], [0.2, -2.0], [8.0, 2.0])}
+                "extended-power": ([2.2, 0.0], [0.2, -2.0], [8.0, 2.0]),
+                "power-harmonic": ([2.2, 0.0, 0.0], [0.2, -0.5, -0.5], [8.0, 0.5, 0.5])}
+
+TONE_ALTERNATIVES = {"gog": 1, "extended-power": 1, "power-harmonic": 2}
+"""The shapes a sweep is tested against the power law with, and their extra parameters: GOG
+(an offset at the toe), extended power (a gamma that changes with level: shoulders, crushed
+toes) and the power law plus the first two sine harmonics of drive (zero at both ends: an S,
+a bump, a shape neither of the others bends to). Each F-test's p-value is multiplied by their
+number (Bonferroni), so trying three shapes does not buy a finding."""
 
 
 def _fit_shape(form, drive, Y, sd, black_guess, full_guess):
@@ -479,19 +490,20 @@ def _tone_test_points(drive, Y, sd, black_guess, full):
     null, rss_null = _fit_shape("power", drive, Y, sd, black_guess, full)
     grid = np.linspace(0, 1, 256)
     best = (1.0, 0.0, 0.0, "power", float("-inf"))
-    for form in ("gog", "extended-power"):
+    for form, extra in TONE_ALTERNATIVES.items():
         alternative, rss_alt = _fit_shape(form, drive, Y, sd, black_guess, full)
-        dof = Y.size - 4
+        dof = Y.size - 3 - extra
         if dof < 1:
             continue
         scale = max(1.0, rss_alt / dof)
-        f_value = (rss_null - rss_alt) / scale
-        p = min(1.0, 2 * f_sf(f_value, 1, dof))
+        f_value = (rss_null - rss_alt) / extra / scale
+        p = min(1.0, len(TONE_ALTERNATIVES) * f_sf(f_value, extra, dof))
         gap = float(np.max(np.abs(_shape("power", grid, null[2:])
                                   - alternative[1] / null[1] * _shape(form, grid, alternative[2:]))))
-        standard_error = gap / np.sqrt(f_value) if f_value > 0 else np.inf
-        if p < best[0] or (p == best[0] and f_value > 0 and z_of_chi2(f_value, 1) > best[4]):
-            best = (p, gap, standard_error, form, z_of_chi2(f_value, 1))
+        z = z_of_chi2(extra * f_value, extra) if f_value > 0 else float("-inf")
+        standard_error = gap / z if z > 0 else np.inf
+        if p < best[0] or (p == best[0] and f_value > 0 and z > best[4]):
+            best = (p, gap, standard_error, form, z)
     return best
 
 
