@@ -1,0 +1,61 @@
+"""What the Fit & diagnose page shows is taken from the diagnosis generically (no Qt needed)."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from workbench.gui import diagnosis_views as views
+from workbench.workspace import load_path
+
+PROFILE = Path(__file__).resolve().parents[2] / "profiles" / "htc-vive-paper.vrprofile.json"
+
+
+class _Diagnosis:
+    """A stand-in whose to_json has fields the real diagnosis does not have (yet)."""
+
+    def __init__(self, document):
+        self._document = document
+
+    def to_json(self):
+        return self._document
+
+
+def test_a_finding_card_carries_every_field_the_finding_has_and_entries_naming_its_effect():
+    document = {
+        "findings": [{"effect": "future-effect", "evidence": "it is there", "z": 4.25, "impact_dE00": 0.5}],
+        "extended": {"terms": [{"effect": "future-effect", "term": "a new term"}]},
+        "noise": {"relative_sd_Y": 0.001},
+    }
+    card, = views.finding_cards(_Diagnosis(document))
+    assert card.effect == "future-effect" and card.evidence == "it is there"
+    assert dict(card.fields) == {"z": "4.25", "impact_dE00": "0.5", "extended.terms: term": "a new term"}
+    assert card.plot is None  # no plot is registered for an effect the page does not know
+    assert ("noise", "relative_sd_Y 0.001") in views.detail_lines(_Diagnosis(document))
+
+
+def test_the_views_of_a_real_diagnosis_have_labelled_axes_and_the_diagnosis_own_numbers():
+    diagnosis = load_path(PROFILE).diagnosis
+    sweeps = views.sweep_views(diagnosis)
+    assert len(sweeps) == 3 and all(v.fit.x_label == "DAC" and "%" in v.residuals.y_label for v in sweeps)
+    additivity = views.additivity_view(diagnosis)
+    expected = 100 * (diagnosis.context.white - diagnosis.context.black) / sum(
+        s.full_XYZ for s in diagnosis.context.sweeps)
+    assert np.allclose(additivity.series[0].y, expected) and additivity.series[0].bars
+    assert [label for _, label in additivity.x_ticks] == ["X", "Y", "Z"]
+    assert views.white_reference_view(diagnosis) is None  # a profile has no white references over time
+    found = [f["effect"] for f in diagnosis.to_json()["findings"]]
+    assert [c.effect for c in views.finding_cards(diagnosis)] == found
+
+
+def test_srgb_swatches_show_the_display_white_as_white_and_clip_what_is_outside():
+    white = np.array([95.0, 100.0, 108.0])
+    assert views.XYZ_to_srgb8(white, white).tolist() == [255, 255, 255]
+    assert views.XYZ_to_srgb8(np.zeros(3), white).tolist() == [0, 0, 0]
+    assert views.XYZ_to_srgb8(np.array([10.0, 60.0, 5.0]), white).tolist()[0] == 0  # red below 0: clipped
+
+
+@pytest.mark.parametrize("summary", ["session", "baseline", "extended"])
+def test_the_verdict_names_session_and_both_models(summary):
+    diagnosis = load_path(PROFILE).diagnosis
+    assert summary in dict(views.summary_lines(diagnosis))
