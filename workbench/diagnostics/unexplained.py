@@ -83,7 +83,9 @@ def _recommendation(context: DiagnosisContext) -> str:
     if not wanted:
         wanted.append("a repeat of the session (to tell an unstable display from a model gap) "
                       "and denser mixtures where the error is largest")
-    return " and ".join(wanted) + " among the fit rows"
+        return " and ".join(wanted) + " among the fit rows"
+    return (" and ".join(wanted) + " among the fit rows (`measure --plan paper+greys` adds "
+            "15 greys and 24 partial-drive mixtures to the paper's plan)")
 
 
 def unexplained_residual(context: DiagnosisContext, model, drift_in_model, validation, white,
