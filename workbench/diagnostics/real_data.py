@@ -167,7 +167,9 @@ def _row(path: Path, folder: Path, with_argyll: bool) -> RealDataRow:
         session = read_session(path)
         diagnosis = diagnose(session)
     except (InputError, SpectrumFileError, ValueError) as error:
-        return RealDataRow(file=name, error=str(error).splitlines()[0][:160])
+        # the first clause of the message, the file by its name in the table
+        reason = str(error).splitlines()[0].split("; ")[0].replace(str(path), name)
+        return RealDataRow(file=name, error=reason)
     document = diagnosis.to_json()
     argyll = None
     if with_argyll:
