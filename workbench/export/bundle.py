@@ -45,7 +45,6 @@ from workbench.export.cube_lut import (
 )
 from workbench.export.level2_files import (
     DEFAULT_IDENTICAL_SHARE,
-    ComponentChoice,
     choose_cube_basis,
     level2_light,
     write_level2_cube,
