@@ -44,7 +44,8 @@ def fitted_on(effect: str, session) -> str:
     n_grey = int(session.mask("grey").sum())
     sweeps = int(session.mask("ramp-r", "ramp-g", "ramp-b").sum())
     return {
-        "temporal-drift": f"the {n_white} white references over time",
+        "temporal-drift": f"the {n_white} white references over time, smoothed as far as "
+                          "their noise allows",
         "black-offset": "the black (0, 0, 0) measurement",
         "tone-curve-shape": f"the {sweeps} sweep points" + (f" and {n_grey} greys" if n_grey else ""),
         "chromaticity-shift": f"the chromaticity of the {sweeps} sweep points",
