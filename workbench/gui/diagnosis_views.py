@@ -230,9 +230,17 @@ def _tone_plot(diagnosis, result) -> PlotView:
 
 
 def _black_plot(diagnosis, result) -> PlotView:
-    views = sweep_views(diagnosis)
-    series = tuple(Series(CHANNEL_NAMES[c], v.fit.series[0].x, v.fit.series[0].y, c) for c, v in enumerate(views))
-    return PlotView("sweeps as measured (black included)", "DAC", "output / full drive", series)
+    """The dark end of the sweeps as measured, where light at DAC 0 shows."""
+    series = []
+    for c, view in enumerate(sweep_views(diagnosis)):
+        measured = view.fit.series[0]
+        dark = measured.x <= _DARK_END_DAC
+        series.append(Series(CHANNEL_NAMES[c], measured.x[dark], measured.y[dark], c))
+    return PlotView("dark end of the sweeps", f"DAC (≤ {_DARK_END_DAC}), as measured", "output / full drive",
+                    tuple(series))
+
+
+_DARK_END_DAC = 64
 
 
 FINDING_PLOTS = {
