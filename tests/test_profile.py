@@ -1,10 +1,24 @@
+import copy
+import io
 import json
+import sys
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from profiles import SCHEMA_PATH, example_profile_path
-from workbench.profile import Profile, ProfileError, load_profile, paper_vive_profile, save_profile
+from workbench.profile import (
+    MAX_PROFILE_BYTES,
+    PROFILE_FORMAT_VERSION,
+    Profile,
+    ProfileError,
+    load_profile,
+    paper_vive_profile,
+    parse_profile_text,
+    save_profile,
+)
 
 
 def test_shipped_vive_profile_is_what_the_code_builds():
@@ -79,20 +93,6 @@ def test_an_extended_profile_with_unusable_parameters_is_refused(tmp_path):
 
 
 # --- robustness (issue 9, item 4) -----------------------------------------------------------
-
-import copy  # noqa: E402
-import io  # noqa: E402
-import sys  # noqa: E402
-
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-
-from workbench.profile import (  # noqa: E402
-    MAX_PROFILE_BYTES,
-    PROFILE_FORMAT_VERSION,
-    parse_profile_text,
-)
-
 
 def _simulated_document():
     return json.loads(example_profile_path("simulated-headset").read_text())

@@ -1,10 +1,15 @@
 """A damaged bundle gives the runtime one clear error (exit status 2), never a traceback or a wrong texture."""
 
+import contextlib
+import io
 import json
+import re
 import shutil
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from tests.export.test_conformance import consumer_module
 
@@ -83,8 +88,6 @@ def test_damaged_bundles_give_one_clear_error(damaged, tmp_path, capsys, name):
     assert module.main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1
-    import re
-
     assert re.search(message, err), err
     assert not out.exists()
 
@@ -99,12 +102,6 @@ def test_the_undamaged_copy_works(damaged, tmp_path, capsys):
 
 
 # Hypothesis: whatever JSON a bundle file holds, the consumer answers or says "error: ..." (exit 2).
-import contextlib  # noqa: E402
-import io  # noqa: E402
-
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-
 _values = st.recursive(
     st.none() | st.booleans() | st.integers(-300, 300) | st.floats(allow_nan=False, width=32)
     | st.text(max_size=6),
