@@ -58,9 +58,10 @@ UNREACHED_THRESHOLD = 2.0
 DEFAULT_CORRECTION_SIZE = 61
 """Nodes per axis of the drive-correction table: spacing 1/40 of the drive range, with nodes
 on drive 0 and 1 exactly (where the clipping kinks are), 2.7 MB as float32. Measured on the
-simulated headset (per-channel co-drive interaction + black), integer DAC equal to the
-model's own inverse on 99.74 % of random colours (49 nodes: 99.59 %; 57, whose nodes miss
-0 and 1: 98.68 %; 73: 99.80 %)."""
+simulated headset's profile (per-channel co-drive interaction + black), integer DAC equal to
+the model's own inverse on 99.97 % of random colours (49 nodes: 99.96 %, 73: 99.97 %); on an
+earlier fit of the same headset, 99.74 % (49: 99.59 %; 57, whose nodes miss drive 0 and 1:
+98.68 %)."""
 
 CORRECTION_DOMAIN = (-0.25, 1.25)
 """Affine-drive range the correction table covers, per channel."""
