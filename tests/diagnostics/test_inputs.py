@@ -89,3 +89,21 @@ def test_noise_model_is_not_fooled_by_heavy_tails_or_a_wandering_display():
     model = estimate_noise(wandering.session.without("validation"))
     assert model.relative_sd_at(1.0) < 0.0015
     assert model.dof > 10 and model.source == "sweep scatter"
+
+
+def test_a_sweep_no_power_law_fits_is_a_shape_even_when_no_alternative_bends_to_it():
+    from workbench.diagnostics.detectors import LACK_OF_FIT, _tone_test_points
+
+    drive = np.concatenate([[0.0], np.arange(5, 256, 5) / 255])
+    power = drive ** 2.2
+    s_curve = 0.65 * power + 0.35 * (3 * power ** 2 - 2 * power ** 3)
+    rng = np.random.default_rng(1)
+    for truth, shaped in ((s_curve, True), (power, False)):
+        Y = 100 * truth * (1 + 0.002 * rng.standard_normal(drive.size)) + 0.01
+        sd = np.hypot(0.002 * 100 * truth, 0.01)
+        p, gap, standard_error, form, z = _tone_test_points(drive, Y, sd, 0.0, 100.0, 35.0)
+        if shaped:
+            # GOG, extended power and two harmonics all fail on the dark points: lack of fit
+            assert form == LACK_OF_FIT and p < 1e-6 and gap > 0.01
+        else:
+            assert p > 0.05

@@ -33,8 +33,11 @@ paper's model holds for this effect":
     per channel, ``K + k·d^γ`` against ``K + k·f(d)`` with ``f`` GOG,
     extended power (one more parameter each) or the power law plus two sine
     harmonics of drive (two more: an S or a bump), weighted by the noise
-    model, black rows at ``d = 0``: F-test of the extra parameters; the
-    smallest p times 3 forms times the channels tested. A channel whose sweep is too
+    model, black rows at ``d = 0``: F-test of the extra parameters; and the
+    power law's lack of fit, its χ² against the noise model (an F-test on
+    the noise estimate's degrees of freedom), which a shape none of the
+    alternatives bends to still fails; the smallest p times 4 tests times
+    the channels tested. A channel whose sweep is too
     short (a DisplayCAL ``.ti3`` has 4 levels) is tested on its sweep and the
     channel outputs the greys imply, in normalized output. Statistic: the largest gap
     between the two fitted curves, in normalized output.
@@ -444,6 +447,9 @@ toes) and the power law plus the first two sine harmonics of drive (zero at both
 a bump, a shape neither of the others bends to). Each F-test's p-value is multiplied by their
 number (Bonferroni), so trying three shapes does not buy a finding."""
 
+LACK_OF_FIT = "lack-of-fit"
+"""The tone test's name for a sweep no power law fits within the noise, whatever the shape."""
+
 
 def _fit_shape(form, drive, Y, sd, black_guess, full_guess):
     start, low, high = _SHAPE_START[form]
@@ -485,11 +491,28 @@ MIN_GREY_LEVELS = 7
 """Greys a channel's shape may be tested on where its own sweep is too short."""
 
 
-def _tone_test_points(drive, Y, sd, black_guess, full):
-    """(p, gap, gap SE, better form, z): power law against GOG / extended power, F-test."""
+def _tone_test_points(drive, Y, sd, black_guess, full, noise_dof=np.inf):
+    """(p, gap, gap SE, better form, z): power law against the alternatives, and its lack of fit.
+
+    Each alternative of :data:`TONE_ALTERNATIVES` by an F-test of its extra
+    parameters; and the power law's own χ² against the noise model (an F-test
+    on the noise estimate's ``noise_dof``), which a shape none of the
+    alternatives bends to still fails. The p-values are multiplied by the
+    number of tests (Bonferroni).
+    """
+    tests = len(TONE_ALTERNATIVES) + 1
     null, rss_null = _fit_shape("power", drive, Y, sd, black_guess, full)
     grid = np.linspace(0, 1, 256)
     best = (1.0, 0.0, 0.0, "power", float("-inf"))
+    dof_null = Y.size - 3
+    if dof_null >= 1:
+        f_value = rss_null / dof_null
+        p = min(1.0, tests * f_sf(f_value, dof_null, noise_dof if np.isfinite(noise_dof)
+                                  else 10 ** 6))
+        residual = Y - (null[0] + null[1] * _shape("power", drive, null[2:]))
+        gap = float(np.max(np.abs(residual)) / null[1]) if null[1] > 0 else 0.0
+        z = z_of_p(p)
+        best = (p, gap, gap / z if z > 0 else np.inf, LACK_OF_FIT, z)
     for form, extra in TONE_ALTERNATIVES.items():
         alternative, rss_alt = _fit_shape(form, drive, Y, sd, black_guess, full)
         dof = Y.size - 3 - extra
@@ -497,7 +520,7 @@ def _tone_test_points(drive, Y, sd, black_guess, full):
             continue
         scale = max(1.0, rss_alt / dof)
         f_value = (rss_null - rss_alt) / extra / scale
-        p = min(1.0, len(TONE_ALTERNATIVES) * f_sf(f_value, extra, dof))
+        p = min(1.0, tests * f_sf(f_value, extra, dof))
         gap = float(np.max(np.abs(_shape("power", grid, null[2:])
                                   - alternative[1] / null[1] * _shape(form, grid, alternative[2:]))))
         z = z_of_chi2(extra * f_value, extra) if f_value > 0 else float("-inf")
@@ -522,7 +545,8 @@ def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
         drive = np.concatenate([np.zeros(context.black_count), sweep.drive])
         counts = np.concatenate([np.ones(context.black_count), sweep.counts])
         sd = context.noise.sd_Y(Y) / np.sqrt(counts)
-        return _tone_test_points(drive, Y, sd, black[1], float(sweep.full_XYZ[1]))
+        return _tone_test_points(drive, Y, sd, black[1], float(sweep.full_XYZ[1]),
+                                 context.noise.dof)
     if greys is None:
         return None
     grey_drive, outputs, grey_sd = greys
@@ -531,7 +555,7 @@ def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
     L = np.concatenate([sweep.output, outputs[:, sweep.channel]])
     sd = np.concatenate([context.noise.sd_Y(sweep.XYZ[:, 1] + context.black[1]) / full_Y
                          / np.sqrt(sweep.counts), grey_sd[:, sweep.channel]])
-    return _tone_test_points(drive, L, sd, 0.0, 1.0)
+    return _tone_test_points(drive, L, sd, 0.0, 1.0, context.noise.dof)
 
 
 def detect_tone_curve_shape(context: DiagnosisContext) -> DetectorResult:
@@ -547,9 +571,14 @@ def detect_tone_curve_shape(context: DiagnosisContext) -> DetectorResult:
     p = min(1.0, len(tested) * p_values[worst])
     _, gap, standard_error, form, z = tests[worst]
     article = "an" if form[0] in "aeiou" else "a"
-    evidence = (f"the {CHANNEL_NAMES[worst]} sweep is not a power law: {article} {form} curve "
-                f"fits it better (F-test p {p_values[worst]:.2g}) and departs from the best "
-                f"power law by up to {100 * gap:.1f} % of full output")
+    if form == LACK_OF_FIT:
+        evidence = (f"the {CHANNEL_NAMES[worst]} sweep is not a power law: no power law fits "
+                    f"it within the noise (lack-of-fit F-test p {p_values[worst]:.2g}), and it "
+                    f"departs from the best one by up to {100 * gap:.1f} % of full output")
+    else:
+        evidence = (f"the {CHANNEL_NAMES[worst]} sweep is not a power law: {article} {form} "
+                    f"curve fits it better (F-test p {p_values[worst]:.2g}) and departs from "
+                    f"the best power law by up to {100 * gap:.1f} % of full output")
     return _result("tone-curve-shape", gap, standard_error, p, evidence,
                    {"max_gap": [0.0 if t is None else t[1] for t in tests],
                     "better_form": [None if t is None else t[3] for t in tests],
