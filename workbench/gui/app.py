@@ -50,15 +50,21 @@ def run_gui(path: str | None = None, *, simulate: bool = False, screenshot_dir: 
     """Show the window (opening ``path`` if given) until it is closed; or, with ``screenshot_dir``,
     run a simulated calibration to the end, render every page to ``DIR/<page>.png`` and exit."""
     app = application()
-    window = build_window(simulate or screenshot_dir is not None, lazy=screenshot_dir is None)
     if screenshot_dir is not None:
-        from workbench.gui.screenshots import save_screenshots
+        import tempfile
 
-        written = save_screenshots(window, Path(screenshot_dir), path=path, time_scale=time_scale)
-        for file in written:
-            print(f"wrote {file}")
-        _dispose(app, window)
+        from workbench.gui.screenshots import save_screenshots
+        from workbench.gui.settings import WindowSettings
+
+        # A fresh layout, and nothing added to the user's recent files.
+        with tempfile.TemporaryDirectory(prefix="vr-workbench-screenshot-settings-") as settings_dir:
+            window = build_window(True, WindowSettings(settings_dir))
+            written = save_screenshots(window, Path(screenshot_dir), path=path, time_scale=time_scale)
+            for file in written:
+                print(f"wrote {file}")
+            _dispose(app, window)
         return 0
+    window = build_window(simulate, lazy=True)
     if time_scale is not None:
         window.pages["calibrate"].form.time_scale.setValue(time_scale)
     window.show()
