@@ -65,6 +65,12 @@ def start_job(function, *, generator: bool = False, returned=None, yielded=None,
             finally:
                 done.set()
     worker = work()
+    # superqt drops a quit generator without closing it, so the ``finally``
+    # above would run only at garbage collection: the worker's own end
+    # (emitted in its thread, whatever the way out) sets the event too.
+    from PySide6.QtCore import Qt
+
+    worker.finished.connect(done.set, Qt.ConnectionType.DirectConnection)
     for signal, slot in ((worker.returned, returned), (worker.errored, errored),
                          (worker.finished, finished)):
         if slot is not None:
