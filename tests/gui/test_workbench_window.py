@@ -160,7 +160,10 @@ def test_cancel_then_resume_continues_the_journal(qtbot, window, tmp_path):
 def test_an_instrument_error_is_shown_and_the_patch_re_measured(qtbot, window, tmp_path):
     calibrate = _configure(window, tmp_path / "run")
     setup = calibrate.form.setup(faults=(ErrorFault("ER83", command="MEAS,1", nth=3, line=2),))
-    with qtbot.waitSignal(calibrate.run_finished, timeout=RUN_TIMEOUT_MS):
+    # Wait for the finished run's session to be loaded too: its loader's
+    # session_loaded must not be mistaken for the re-measure's below.
+    with qtbot.waitSignals([calibrate.run_finished, calibrate.session_loaded],
+                           timeout=RUN_TIMEOUT_MS, order="strict"):
         calibrate.start(setup)  # the emulator is told to fail the third measurement
     assert calibrate.patches.status(2) == "FAILED"
     assert "ER83" in calibrate.patches.note(2) and "knob" in calibrate.patches.note(2)

@@ -98,9 +98,9 @@ class _WorkerPatchDisplay:
         self._display = display
         self._description = display.describe()
 
-    def show(self, rgb_dac) -> None:
-        """Show ``rgb_dac`` in the window; return once it is painted."""
-        self._display.show(rgb_dac)
+    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
+        """Show ``rgb_dac`` (as ``window`` of the screen on ``surround``); return once painted."""
+        self._display.show(rgb_dac, window=window, surround=surround)
 
     def close(self) -> None:
         """Nothing: the window belongs to :func:`run_with_patch_window`."""

@@ -60,8 +60,9 @@ class _WindowPatchDisplay:
         self._display = display
         self._description = display.describe()
 
-    def show(self, rgb_dac) -> None:
-        self._display.show(rgb_dac)
+    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
+        """Show ``rgb_dac`` (as ``window`` of the screen on ``surround``); return once painted."""
+        self._display.show(rgb_dac, window=window, surround=surround)
 
     def close(self) -> None:
         """Nothing: the window belongs to the page."""

@@ -31,6 +31,7 @@ from PySide6.QtWidgets import (
 
 from instruments.headset import HEADSET_EFFECTS
 from workbench.errors import WorkbenchError
+from workbench.measurement.plans import MEASUREMENT_PLANS
 from workbench.gui.calibration_setup import (
     DISPLAY_KINDS,
     SIMULATED,
@@ -139,8 +140,10 @@ class CalibrationForm(QWidget):
         group = QGroupBox("Plan and output")
         form = QFormLayout(group)
         self.plan = QComboBox()
-        self.plan.addItem("paper (214 patches, as in the paper)", "paper")
-        self.plan.addItem("quick (28 patches)", "quick")
+        for name, make_plan in MEASUREMENT_PLANS.items():
+            what = {"paper": ", as in the paper", "paper+greys": ", with greys and mixtures",
+                    "apl": ", windows on surrounds", "paper+apl": ", with the APL block"}
+            self.plan.addItem(f"{name} ({len(make_plan(0))} patches{what.get(name, '')})", name)
         self.plan.addItem("from a file…", "file")
         form.addRow("plan", self.plan)
         row = QHBoxLayout()
