@@ -94,6 +94,10 @@ def save_screenshots(window, directory: Path, *, path=None, time_scale: float | 
                 page.bundle_written.connect(bundles.append)
                 page.write_bundle()  # beside the profile, in the temporary session directory
                 _wait(lambda: bundles, what="the runtime bundle")
+            if key == "scene" and callable(getattr(page, "select_source", None)):
+                # The paper's point: the two-peak D65 metamer looks like D65 at
+                # level 1 and shows what it really does to colours at level 2.
+                page.select_source("d65-two-peak")
             file = directory / f"{key}.png"
             if callable(getattr(page, "save_screenshot", None)):
                 page.save_screenshot(file)
