@@ -5,7 +5,9 @@ measured under at least two different frames (window sizes, surrounds), the
 log luminance is regressed on the frame's load within each patch (one
 intercept per patch, one common slope ``β``). With a relative measurement
 noise ``σ`` (standard deviation of ``ΔY/Y`` for one measurement), the slope's
-standard error is ``σ / sqrt(Σ (L − L̄_patch)²)``. The statistic is ``−β``: the
+standard error is ``σ / sqrt(Σ (L − L̄_patch)²)``; with a noise per row
+``σ_i`` (dim rows are noisier), ``sqrt(Σ c_i² σ_i²) / Σ c_i²`` with ``c_i`` the
+centred loads (the least-squares slope's exact standard error). The statistic is ``−β``: the
 loss of ln luminance per unit of load (from black to a full-field white;
 about the fractional loss when small), ``z = −β / SE``; an OLED's power
 limiting makes it positive.
@@ -68,16 +70,17 @@ class AplDependenceTest:
     effect: str = EFFECT_ID
 
 
-def detect_apl_dependence(session: Session, relative_noise: float) -> AplDependenceTest:
+def detect_apl_dependence(session: Session, relative_noise) -> AplDependenceTest:
     """Test whether the same patch's output varies with the frame's load beyond noise.
 
     Parameters
     ----------
     session : Session
         With ``window``/``surround`` columns (drift-corrected if it drifts).
-    relative_noise : float
+    relative_noise : float or array_like, shape (N,)
         Standard deviation of one measurement's relative luminance error
-        (e.g. 0.002 for 0.2 %), estimated from the session's own repeats.
+        (e.g. 0.002 for 0.2 %), estimated from the session's own repeats; or
+        one per session row (from the session's noise model).
 
     Returns
     -------
@@ -89,8 +92,9 @@ def detect_apl_dependence(session: Session, relative_noise: float) -> AplDepende
     InputError
         For a relative noise that is not a positive finite number.
     """
-    if not (math.isfinite(relative_noise) and relative_noise > 0):
-        raise InputError(f"relative_noise {relative_noise!r} must be a positive number "
+    noise = np.broadcast_to(np.asarray(relative_noise, dtype=float), (len(session),))
+    if not np.all(np.isfinite(noise) & (noise > 0)):
+        raise InputError(f"relative_noise {relative_noise!r} must be positive numbers "
                          "(the standard deviation of ΔY/Y of one measurement, e.g. 0.002)")
     data = load_rows(session)
     if len(data) == 0:
@@ -111,7 +115,7 @@ def detect_apl_dependence(session: Session, relative_noise: float) -> AplDepende
                                  testable=False, rows=len(data), patches=len(counts))
     slope = float(np.sum(load_centred * log_centred) / spread)
     statistic = -slope
-    standard_error = relative_noise / math.sqrt(spread)
+    standard_error = math.sqrt(float(np.sum(load_centred ** 2 * noise[data.index] ** 2))) / spread
     z = statistic / standard_error
     impact, low_high = _impact(data, load)
     patches = len(counts)

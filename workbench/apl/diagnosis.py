@@ -19,7 +19,7 @@ from workbench.apl.holdout import AplHoldout, apl_fold_labels, evaluate_apl_hold
 from workbench.errors import InputError
 from workbench.session import Session
 
-__all__ = ["AplDiagnosis", "diagnose_apl", "full_field_rows"]
+__all__ = ["AplDiagnosis", "diagnose_apl", "full_field_rows", "subset_with_labels"]
 
 
 @dataclass(frozen=True)
@@ -69,15 +69,27 @@ def full_field_rows(session: Session) -> np.ndarray:
     return session.window_or_full >= 1.0
 
 
-def diagnose_apl(session: Session, relative_noise: float) -> AplDiagnosis:
+def subset_with_labels(session: Session, mask) -> Session:
+    """``session.subset(mask)`` with a reader's per-row held-out labels (``apl_folds``) subset too."""
+    mask = np.asarray(mask, dtype=bool)
+    subset = session.subset(mask)
+    folds = session.metadata.get("apl_folds")
+    if folds:
+        subset.metadata["apl_folds"] = {name: np.asarray(labels, dtype=object)[mask]
+                                        for name, labels in folds.items()}
+    return subset
+
+
+def diagnose_apl(session: Session, relative_noise) -> AplDiagnosis:
     """Test, fit and score ``apl-dependence`` on ``session``.
 
     Parameters
     ----------
     session : Session
         Drift-corrected if it drifts.
-    relative_noise : float
-        The session's relative luminance noise (one measurement's ``ΔY/Y`` sd).
+    relative_noise : float or array_like, shape (N,)
+        The session's relative luminance noise (one measurement's ``ΔY/Y`` sd),
+        or one per row.
 
     Returns
     -------

@@ -116,7 +116,61 @@ def _print_text(diagnosis) -> None:
     gain = result["gain"]["mean_dE00_reduction_pct"]
     if gain is not None:
         print(f"gain      mean ΔE00 reduced by {gain:.0f} % on colours neither model was fitted on")
+    _print_apl(result)
     print("(CIEDE2000 in CIELAB whose white is the measured display white)")
+
+
+def _print_apl(result) -> None:
+    """The APL curve and its held-out error: the closing note of a session with windows."""
+    apl = result.get("apl")
+    if not apl or apl["curve"] is None:
+        return
+    curve = apl["curve"]
+    print(f"APL curve {curve['formula']}: L0 {curve['knee']:.3g}, n {curve['sharpness']:.3g}, "
+          f"a {curve['exponent']:.3g} (load L: 0 black, 1 full-field white; the model holds at "
+          "the reference load, each patch full field)")
+    for holdout in apl["holdout"]:
+        print(f"held out  leave one {holdout['by']} out ({len(holdout['folds'])} folds): "
+              f"{holdout['luminance_error_pct']:.1f} % of luminance, {holdout['mean_dE00']:.2f} "
+              f"ΔE00 mean (p95 {holdout['p95_luminance_error_pct']:.1f} %, "
+              f"{holdout['p95_dE00']:.2f}); without a load term "
+              f"{holdout['without_load_term']['luminance_error_pct']:.1f} %, "
+              f"{holdout['without_load_term']['mean_dE00']:.2f} ΔE00")
+
+
+def _print_load_only(diagnosis) -> None:
+    """A session with windows or surrounds but no display model: apl-dependence alone."""
+    result = diagnosis.to_json()
+    print(f"session {result['session']['source']}: {result['session']['measurements']} "
+          "measurements; no display model can be fitted (no full-field sweep of each channel): "
+          "apl-dependence tested alone")
+    print(f"noise     {result['noise']['summary']}")
+    significance = result["significance"]
+    finding = (result["findings"] or result["checked"] or [None])[0]
+    if finding is not None and finding["critical_z"] is not None:
+        print(f"tests     a finding needs z above {finding['critical_z']:.2f} (family-wise "
+              f"false-finding rate {100 * significance['family_alpha']:.0f} %, "
+              f"{significance['method']}) and an impact of at least "
+              f"{significance['materiality_floor_dE00']:g} mean ΔE00 between "
+              f"{significance['materiality_colours']}")
+    for note in result["untested"]:
+        print(f"untested  {note['effect']}: {note['reason']}")
+    if not result["findings"]:
+        print("findings  none beyond noise")
+    for i, found in enumerate(result["findings"], start=1):
+        print(_finding_line(i, found))
+        print(f"          → {diagnosis_term()}")
+    for check in result["checked"]:
+        if check["testable"]:
+            print(f"checked   {check['effect']} (z {check['z']:.1f}): {check['evidence']}")
+    _print_apl(result)
+    print("(CIEDE2000 in CIELAB whose white is the brightest patch's zero-load output)")
+
+
+def diagnosis_term() -> str:
+    from workbench.diagnostics.selection import APL_TERM
+
+    return APL_TERM
 
 
 def _critical(result) -> float:
@@ -127,13 +181,20 @@ def _critical(result) -> float:
 
 
 def _diagnose(args) -> int:
-    from workbench.diagnostics import diagnose
+    from workbench.diagnostics.load_only import LoadOnlyDiagnosis, diagnose_what_it_can
     from workbench.session_readers import read_session
 
-    diagnosis = diagnose(read_session(args.session))
+    diagnosis = diagnose_what_it_can(read_session(args.session))
+    load_only = isinstance(diagnosis, LoadOnlyDiagnosis)
+    if load_only and (args.export or args.report):
+        raise InputError(f"{args.session}: no display model can be fitted (no full-field sweep "
+                         "of each channel), so there is no profile or report to write; measure "
+                         "plan 'paper+apl', or drop --export/--report")
     if args.json:
         json.dump(diagnosis.to_json(), sys.stdout, indent=1)
         print()
+    elif load_only:
+        _print_load_only(diagnosis)
     else:
         _print_text(diagnosis)
     if args.export:

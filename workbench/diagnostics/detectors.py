@@ -42,6 +42,19 @@ paper's model holds for this effect":
     channel outputs the greys imply, in normalized output. Statistic: the largest gap
     between the two fitted curves, in normalized output.
 
+``apl-dependence``
+    the same patch's ln luminance regressed on its frame's load, one
+    intercept per patch (:mod:`workbench.apl.detector`), on every distinct
+    row (copies left out) shown as a window or on a lit surround beside the
+    same patch's other frames, drift-corrected when drift was found; each
+    row's relative noise from the noise model; one-sided Student t on the
+    noise estimate's degrees of freedom. Statistic: the loss of ln luminance
+    per unit of load. Its impact is the test's own: the mean ΔE00 between
+    each patch at its lowest and its highest measured load.
+
+Every detector but ``apl-dependence`` reads the full-field rows only: a
+patch shown as a window is shown at another load than the model's.
+
 The F-tests divide by the larger of the noise model and the fit's own
 residual variance, so a sweep that scatters more than the noise model says
 cannot turn into a finding. :func:`run_detectors` then applies the
@@ -79,7 +92,14 @@ from workbench.diagnostics.significance import (
 )
 from workbench.session import Session
 
+APL_EFFECT = "apl-dependence"
+
 __all__ = [
+    "APL_EFFECT",
+    "FULL_FIELD_DETECTORS",
+    "apl_dependence_result",
+    "detect_apl_dependence_in_context",
+    "tested_detector_count",
     "DetectorResult",
     "DiagnosisContext",
     "DETECTORS",
@@ -172,6 +192,16 @@ class DiagnosisContext:
     copies: np.ndarray
     black_count: int
     white_count: int
+    load_session: Session | None = None
+    """Every distinct fit row, windows and surrounds included (drift-corrected where the fit
+    rows are): what ``apl-dependence`` reads. None: the session shows every patch full field."""
+
+    @property
+    def apl_testable(self) -> bool:
+        """Whether some patch was measured under two frames (the APL test counts then)."""
+        from workbench.apl import load_rows
+
+        return self.load_session is not None and len(load_rows(self.load_session)) > 0
 
 
 def _untestable(effect: str, why: str) -> DetectorResult:
@@ -187,19 +217,30 @@ def _result(effect, statistic, standard_error, p_value, evidence, details, z=Non
                           float(z), np.inf, True, evidence, details=details)
 
 
+def tested_detector_count(apl_testable: bool) -> int:
+    """Detectors the family-wise level divides among: all, the APL test only when testable."""
+    return len(DETECTORS) - (0 if apl_testable else 1)
+
+
 def build_context(fit_session: Session, drift_found: bool | None = None,
-                  noise: NoiseModel | None = None) -> DiagnosisContext:
-    """The detectors' view of ``fit_session``.
+                  noise: NoiseModel | None = None, load_session: Session | None = None
+                  ) -> DiagnosisContext:
+    """The detectors' view of ``fit_session`` (full-field rows).
 
     ``drift_found`` None: decided by the drift test at the family-wise level
-    for all detectors; ``noise`` None: estimated from ``fit_session``.
+    for all detectors; ``noise`` None: estimated from ``fit_session``;
+    ``load_session``: the fit rows with windows and surrounds too, for
+    ``apl-dependence`` (None where every patch is full field).
     """
     noise = estimate_noise(fit_session) if noise is None else noise
     copies = copy_rows(fit_session)
     drift, time_basis = drift_references(fit_session, copies)
+    if load_session is not None and not load_session.has_surround_data:
+        load_session = None
     if drift_found is None:
         test = detect_temporal_drift_raw(drift, time_basis, noise)
-        drift_found = test.testable and test.p_value <= critical_p(len(DETECTORS))
+        apl = load_session is not None and _load_rows_count(load_session) > 0
+        drift_found = test.testable and test.p_value <= critical_p(tested_detector_count(apl))
     if drift is not None and drift_found:
         # the correction follows the references only as far as they rise above their noise
         drift = drift.smoothed_to_noise(noise.sd_Y(drift.luminances) / drift.luminances)
@@ -210,10 +251,29 @@ def build_context(fit_session: Session, drift_found: bool | None = None,
     sweeps = channel_sweeps(corrected, black, keep=~copies)
     white = (corrected.XYZ[whites].mean(axis=0) if whites.any()
              else black + sum(s.full_XYZ for s in sweeps))  # ramps only: the additive white
+    if load_session is not None:
+        from workbench.apl.diagnosis import subset_with_labels
+
+        load_session = subset_with_labels(load_session, ~copy_rows(load_session))
+        if drift is not None and drift_found and load_session.t_s is not None:
+            load_session = _with_labels_of(load_session, drift.correct(load_session))
     return DiagnosisContext(raw=fit_session, fit=corrected, drift=drift, drift_found=drift_found,
                             black=black, white=white, sweeps=sweeps, noise=noise,
                             time_basis=time_basis, copies=copies, black_count=int(blacks.sum()),
-                            white_count=int(whites.sum()))
+                            white_count=int(whites.sum()), load_session=load_session)
+
+
+def _load_rows_count(session: Session) -> int:
+    from workbench.apl import load_rows
+
+    return len(load_rows(session))
+
+
+def _with_labels_of(labelled: Session, corrected: Session) -> Session:
+    """``corrected`` (same rows as ``labelled``) with ``labelled``'s held-out labels."""
+    if "apl_folds" in labelled.metadata:
+        corrected.metadata["apl_folds"] = labelled.metadata["apl_folds"]
+    return corrected
 
 
 def _drift_form(drift: DriftCorrection, sd: float) -> str:
@@ -585,29 +645,69 @@ def detect_tone_curve_shape(context: DiagnosisContext) -> DetectorResult:
                     "p_per_channel": p_values}, z=z)
 
 
+def detect_apl_dependence_in_context(context: DiagnosisContext) -> DetectorResult:
+    """``apl-dependence`` on the context's load rows, each row's noise from the noise model."""
+    return apl_dependence_result(context.load_session, context.noise)
+
+
+def apl_dependence_result(session: Session | None, noise: NoiseModel) -> DetectorResult:
+    """The ``apl-dependence`` test of ``session`` (distinct rows) against ``noise``."""
+    from scipy.special import stdtr
+
+    from workbench.apl import detect_apl_dependence
+
+    if session is None or not session.has_surround_data:
+        return _untestable(APL_EFFECT, "every patch was measured full field on black; measure "
+                                       "plan 'apl' or 'paper+apl' (windows and surrounds)")
+    Y = np.abs(session.XYZ[:, 1])
+    relative = noise.sd_Y(Y) / np.maximum(Y, 1e-300)
+    test = detect_apl_dependence(session, relative)
+    if not test.testable:
+        return _untestable(APL_EFFECT, test.evidence.removeprefix("not testable: "))
+    p = float(stdtr(noise.dof, -test.z))  # one-sided: the noise is estimated
+    result = _result(APL_EFFECT, test.statistic, test.standard_error, p,
+                     f"{test.evidence} (the session's noise model: "
+                     f"{100 * float(np.median(relative[relative < 1])):.2f} % median relative "
+                     "luminance noise of these rows)",
+                     {"rows": test.rows, "patches": test.patches,
+                      "impact_dE00_low_vs_high_load": test.impact_dE00}, z=test.z)
+    return replace(result, impact_dE00=test.impact_dE00)
+
+
 DETECTORS = {
     "temporal-drift": detect_temporal_drift,
     "black-offset": detect_black_offset,
     "channel-interaction": detect_channel_interaction,
     "chromaticity-shift": detect_chromaticity_shift,
     "tone-curve-shape": detect_tone_curve_shape,
+    APL_EFFECT: detect_apl_dependence_in_context,
 }
 """Effect id → detector, in the order they run."""
 
+FULL_FIELD_DETECTORS = tuple(e for e in DETECTORS if e != APL_EFFECT)
+"""The detectors that read the full-field rows (and need the display model's ramps)."""
 
-def run_detectors(fit_session: Session, noise: NoiseModel | None = None
+
+def run_detectors(fit_session: Session, noise: NoiseModel | None = None,
+                  load_session: Session | None = None, effects=None
                   ) -> tuple[DiagnosisContext, tuple[DetectorResult, ...]]:
     """Every detector on the fit rows, with the family-wise significance level applied.
 
     The level is ``FAMILY_ALPHA / m`` for the ``m`` detectors of
     :data:`DETECTORS` (all of them, tested or not: a session that cannot test
-    an effect does not earn the others a looser level).
+    an effect does not earn the others a looser level), but
+    ``apl-dependence`` counts only where it is testable (a session without
+    windows or surrounds keeps the level it had before the test existed).
+    ``effects``: run only these detectors (default all; a session without
+    ramps runs ``apl-dependence`` alone).
     """
-    context = build_context(fit_session, noise=noise)
-    level = critical_p(len(DETECTORS), FAMILY_ALPHA)
+    context = build_context(fit_session, noise=noise, load_session=load_session)
+    level = critical_p(tested_detector_count(context.apl_testable), FAMILY_ALPHA)
     critical = z_of_p(level)
     results = []
-    for detector in DETECTORS.values():
+    for effect, detector in DETECTORS.items():
+        if effects is not None and effect not in effects:
+            continue
         result = detector(context)
         if result.testable:
             result = replace(result, critical_z=critical, significant=result.p_value <= level)

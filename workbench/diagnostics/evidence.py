@@ -83,7 +83,8 @@ class DriftCorrection:
         return Session(kind=session.kind, rgb=session.rgb, XYZ=session.XYZ / g, t_s=session.t_s,
                        wavelengths=session.wavelengths,
                        spectra=None if session.spectra is None else session.spectra / g,
-                       source=session.source, metadata=dict(session.metadata))
+                       source=session.source, metadata=dict(session.metadata),
+                       window=session.window, surround=session.surround)
 
     @property
     def span(self) -> float:

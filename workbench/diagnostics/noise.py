@@ -16,7 +16,7 @@ Where the numbers come from (:func:`estimate_noise`), all from the rows a
 model may be fitted on:
 
 - **Sweep scatter.** Every sweep with at least :data:`MIN_SWEEP_LEVELS`
-  levels (each channel's ramp, the grey ramp) is predicted point by point by
+  levels (each channel's ramp, the grey ramp; full-field rows) is predicted point by point by
   a quadratic through its neighbours (three on each side, the point itself
   left out); the residuals are a known linear map ``A`` of the measurements,
   so their variance is exact (``Σ_k A_ik² σ_k²``). ``a`` comes from the
@@ -26,7 +26,8 @@ model may be fitted on:
   residuals of x and y; ``b`` from the dark points (Y < 2 % of white) and
   repeated blacks. This is why the drift test can use it: it does not come
   from the references under test.
-- **Repeated patches.** Rows with the same DAC values measured more than once
+- **Repeated patches.** Rows with the same DAC values (under the same frame:
+  window and surround) measured more than once
   (the white references, repeated blacks, any other repeats) give a second
   estimate of ``a``, reported beside the first. Rows whose XYZ equal an
   earlier row's to the last digit are copies (DisplayCAL writes its first
@@ -220,8 +221,12 @@ def copy_rows(session: Session) -> np.ndarray:
 
 
 def _sweeps(session: Session, keep: np.ndarray) -> list[tuple[np.ndarray, ...]]:
-    """(row index, drive, XYZ) of each single-channel ramp and of the grey ramp, one row per level."""
+    """(row index, drive, XYZ) of each single-channel ramp and of the grey ramp, one row per level.
+
+    Full-field rows only: a patch shown as a window depends on its frame's load.
+    """
     rgb = session.rgb
+    keep = keep & (session.window_or_full >= 1.0)  # a window's output depends on its frame's load
     lit = rgb > 0
     single = [(lit.sum(axis=1) == 1) & lit[:, c] for c in range(3)]
     grey = (rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2]) & (rgb[:, 0] > 0) & (rgb[:, 0] < 255)
@@ -326,10 +331,13 @@ def estimate_noise(session: Session) -> NoiseModel:
             chroma_sq.extend(rc[bright] ** 2 / inflation[bright] / scale[bright])
 
     repeat_sq, groups = [], 0
-    keys = [tuple(v) for v in session.rgb]
+    # a repeat is the same patch under the same frame (window, surround): an OLED shows a patch
+    # dimmer when more of the frame is lit, which is apl-dependence, not noise
+    keys = [tuple(v) + (w,) + tuple(s) for v, w, s in
+            zip(session.rgb, session.window_or_full, session.surround_or_black)]
     for key in set(keys):
         rows = np.flatnonzero([(k == key) for k in keys] & ~copies)
-        if rows.size < 2 or max(key) <= 0:
+        if rows.size < 2 or max(key[:3]) <= 0:
             continue
         Y = session.XYZ[rows, 1]
         if np.mean(Y) < _BRIGHT * white_Y:

@@ -11,6 +11,15 @@ prediction of the fit rows (:mod:`workbench.diagnostics.cross_validation`).
 The validation rows are read once the model is final: for the score, the
 attribution and the ``unexplained-residual`` check, never to choose a term.
 
+Rows shown as a window or on a lit surround (``apl-dependence``): the
+baseline, the extension and every other detector read the full-field rows
+only (the reference load); the APL test reads every distinct fit row, and
+when ``apl-dependence`` is found the model gains a load term, the APL curve
+(:mod:`workbench.apl.curve`), fitted on the patches measured under several
+frames and scored by leaving one window size or surround level out
+(:class:`~workbench.apl.diagnosis.AplDiagnosis`): a patch on a frame of load
+``L`` shows ``gain(L) / gain(L_ref)`` of the full-field prediction.
+
 Findings are ordered with ``temporal-drift`` first (the other detectors read
 its correction, so it is the cause they are conditioned on), then by impact
 on the fixed colours, then ``unexplained-residual``.
@@ -22,12 +31,15 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from workbench.apl.diagnosis import AplDiagnosis, diagnose_apl, full_field_rows, subset_with_labels
 from workbench.colorimetry import delta_E2000
 from workbench.diagnostics.detectors import (
+    APL_EFFECT,
     DetectorResult,
     DiagnosisContext,
     build_context,
     run_detectors,
+    tested_detector_count,
 )
 from workbench.diagnostics.cross_validation import select_terms
 from workbench.diagnostics.extension import (
@@ -43,13 +55,18 @@ from workbench.diagnostics.significance import (
     MATERIALITY_FLOOR_DE00,
     mean_dE00_on_fixed_colours,
 )
+from workbench.diagnostics.noise import estimate_noise
 from workbench.diagnostics.unexplained import unexplained_residual
 from workbench.display import DisplayModel, GammaMatrixDisplay
 from workbench.display.residual_lut import fit_residual_lut
 from workbench.errors import InputError
 from workbench.session import Session
 
-__all__ = ["ValidationScore", "Diagnosis", "diagnose", "score_validation"]
+__all__ = ["ValidationScore", "Diagnosis", "NoDisplayModelError", "diagnose", "score_validation", "APL_TERM",
+           "load_relative_noise"]
+
+APL_TERM = "load term: output × gain(L) / gain(L_ref), the APL curve of the frame's load"
+"""What the extended model gains when ``apl-dependence`` is found."""
 
 
 @dataclass(frozen=True)
@@ -90,6 +107,27 @@ class Diagnosis:
     attribution: dict | None = None
     unexplained: DetectorResult | None = None
     cross_validation: dict = field(default_factory=dict)
+    apl: AplDiagnosis | None = None
+
+    @property
+    def apl_curve(self):
+        """The load term's APL curve where ``apl-dependence`` was found and modelled, else None."""
+        return None if self.apl is None else self.apl.curve
+
+    def forward_on_frame(self, rgb, window=None, surround=None) -> np.ndarray:
+        """XYZ of ``rgb`` shown as ``window`` (default full field) on ``surround`` (default black).
+
+        The extended model's full-field prediction times the load term's
+        ``gain(L) / gain(L_ref)`` where ``apl-dependence`` is in the model.
+        """
+        rgb = np.asarray(rgb, dtype=float).reshape(-1, 3)
+        XYZ = self.extended.forward(rgb)
+        curve = self.apl_curve
+        if curve is None or window is None:
+            return XYZ
+        surround = np.zeros_like(rgb) if surround is None else surround
+        window = np.broadcast_to(np.asarray(window, dtype=float), (len(rgb),))
+        return XYZ * curve.relative_gain(rgb, window, surround)[:, None]
 
     @property
     def findings(self) -> tuple[DetectorResult, ...]:
@@ -148,15 +186,14 @@ class Diagnosis:
             "untested": [{"effect": e, "reason": why} for e, why in self.untested],
             "noise": self.context.noise.to_json(),
             "significance": {"family_alpha": FAMILY_ALPHA, "method": "Bonferroni over the "
-                             f"{len(self.results)} detectors",
+                             f"{tested_detector_count(self.context.apl_testable)} detectors",
                              "materiality_floor_dE00": MATERIALITY_FLOOR_DE00,
                              "materiality_colours": "5×5×5 cube of DAC values 0, 64, 128, 191, 255"},
             "cross_validation": {k: v for k, v in self.cross_validation.items()
                                  if k not in ("tone_forms", "by_effect")},
             "extended": {"model": self.extended.describe(), "protocol": self.protocol,
-                         "terms": [{"effect": r.effect, "term": TERMS[r.effect],
-                                    "fitted_on": fitted_on(r.effect, self.context.fit)}
-                                   for r in self.findings if r.in_model],
+                         "terms": [_term_json(r.effect, self) for r in self.findings
+                                   if r.in_model],
                          "validation": None if ext is None else ext.to_json()},
             "gain": {"mean_dE00_reduction_pct": self.gain_pct},
             "attribution": self._attribution_json(),
@@ -165,7 +202,38 @@ class Diagnosis:
                 "validation": score_validation(self.fallback_dE).to_json()},
             "reference_white": "measured display white (mean of the white rows), CIELAB for ΔE00",
             **({"unexplained": _finding_json(self.unexplained)} if self.unexplained else {}),
+            "apl": None if self.apl is None else self.apl.to_json(),
         }
+
+
+def _term_json(effect: str, diagnosis: "Diagnosis") -> dict:
+    if effect == APL_EFFECT:
+        return {"effect": effect, "term": APL_TERM, "fitted_on": diagnosis.apl.curve.fitted_on}
+    return {"effect": effect, "term": TERMS[effect],
+            "fitted_on": fitted_on(effect, diagnosis.context.fit)}
+
+
+def load_relative_noise(context: DiagnosisContext) -> np.ndarray:
+    """Each load row's relative luminance noise (one measurement), from the noise model."""
+    Y = np.abs(context.load_session.XYZ[:, 1])
+    return context.noise.sd_Y(Y) / np.maximum(Y, 1e-300)
+
+
+def _apl_part(context: DiagnosisContext, results) -> tuple[tuple, AplDiagnosis | None]:
+    """The APL curve and its held-out scores where ``apl-dependence`` was found; the term enters."""
+    apl = next((r for r in results if r.effect == APL_EFFECT), None)
+    if apl is None or not apl.significant:
+        return results, None
+    found = bool(apl.impact_dE00 is not None and apl.impact_dE00 >= MATERIALITY_FLOOR_DE00)
+    if not found:
+        return tuple(replace(r, found=False) if r.effect == APL_EFFECT else r
+                     for r in results), None
+    part = diagnose_apl(context.load_session, load_relative_noise(context))
+    note = ("in the model: " + "; ".join(f"APL curve, {h.one_line()}" for h in part.holdouts)
+            if part.holdouts else "in the model: no window size or surround level could be "
+                                  "held out to score the APL curve")
+    return tuple(replace(r, found=True, in_model=True, cross_validation=note)
+                 if r.effect == APL_EFFECT else r for r in results), part
 
 
 def _number(value):
@@ -196,11 +264,20 @@ def with_measurement_order(session: Session) -> Session:
     return Session(kind=session.kind, rgb=session.rgb, XYZ=session.XYZ,
                    t_s=np.arange(len(session), dtype=float), wavelengths=session.wavelengths,
                    spectra=session.spectra, source=session.source,
-                   metadata={**session.metadata, "time_basis": "row order"})
+                   metadata={**session.metadata, "time_basis": "row order"},
+                   window=session.window, surround=session.surround)
 
 
 UNORDERED_FORMATS = ("psychtoolbox", "profile")
 """Session formats whose rows are not in measurement order."""
+
+
+class NoDisplayModelError(InputError):
+    """The session's full-field rows cannot fit the paper's model, but it has windows or surrounds.
+
+    :func:`workbench.diagnostics.load_only.diagnose_what_it_can` then tests
+    ``apl-dependence`` alone.
+    """
 
 
 def diagnose(session: Session) -> Diagnosis:
@@ -216,15 +293,29 @@ def diagnose(session: Session) -> Diagnosis:
     if len(session) == 0:
         raise InputError(f"session {session.source!r} is empty")
     session = with_measurement_order(session)
-    fit_session = session.without("validation")
-    validation = session.select("validation")
+    load_session = None
+    if session.has_surround_data:  # the model reads the full-field rows, the APL test all
+        load_session = subset_with_labels(session, ~session.mask("validation"))
+        session_full = session.subset(full_field_rows(session))
+    else:
+        session_full = session
+    fit_session = session_full.without("validation")
+    validation = session_full.select("validation")
     if "baseline_parameters" in session.metadata:  # published numbers: nothing to fit on
         baseline = GammaMatrixDisplay.from_parameters(session.metadata["baseline_parameters"])
     else:
-        baseline = GammaMatrixDisplay.fit(fit_session)
-    context, results = run_detectors(fit_session)
+        try:
+            baseline = GammaMatrixDisplay.fit(fit_session)
+        except InputError as error:
+            if load_session is None:
+                raise
+            raise NoDisplayModelError(str(error).replace("the paper's model", "the paper's model "
+                                      "(full-field rows)")) from None
+    noise = estimate_noise(fit_session if load_session is None else load_session)
+    context, results = run_detectors(fit_session, noise=noise, load_session=load_session)
+    results, apl = _apl_part(context, results)
     tone_forms = None
-    significant = [r.effect for r in results if r.significant]
+    significant = [r.effect for r in results if r.significant and r.effect != APL_EFFECT]
     if "tone-curve-shape" in significant:
         # the forms are chosen by BIC on the fit rows (with every significant term, so
         # grey-derived points are read through them); every later fit refits these forms.
@@ -233,21 +324,24 @@ def diagnose(session: Session) -> Diagnosis:
         tone_forms = _tone_forms(fit_extended(context, significant, baseline,
                                               tone_candidates=PARAMETRIC_TONE_FORMS))
     results = _materiality(context, results, baseline, tone_forms)
-    found = [r.effect for r in results if r.found]
+    found = [r.effect for r in results if r.found and r.effect != APL_EFFECT]
     if "tone-curve-shape" in found:
         tone_forms = _tone_forms(fit_extended(context, significant, baseline))
     if "temporal-drift" not in found and context.drift_found:
-        context = build_context(fit_session, drift_found=False, noise=context.noise)
+        context = build_context(fit_session, drift_found=False, noise=context.noise,
+                                load_session=load_session)
     terms, cross_validation = select_terms(context, found, baseline,
                                            {r.effect: r.impact_dE00 for r in results}, tone_forms)
     if terms and "temporal-drift" not in terms and context.drift_found:
-        context = build_context(fit_session, drift_found=False, noise=context.noise)
+        context = build_context(fit_session, drift_found=False, noise=context.noise,
+                                load_session=load_session)
     extended = (fit_extended(context, terms, baseline, tone_forms)
                 if cross_validation.get("use_extension") else baseline)
-    results = tuple(replace(r, in_model=r.effect in terms and extended is not baseline,
+    results = tuple(r if r.effect == APL_EFFECT else
+                    replace(r, in_model=r.effect in terms and extended is not baseline,
                             cross_validation=cross_validation["by_effect"].get(r.effect, ""))
                     for r in results)
-    white = session.white_XYZ if session.has_white else context.white
+    white = session_full.white_XYZ if session_full.has_white else context.white
     in_model = [t for t in terms if extended is not baseline]
     if len(validation):
         baseline_dE = delta_E2000(baseline.forward(validation.rgb), validation.XYZ, white)
@@ -257,7 +351,7 @@ def diagnose(session: Session) -> Diagnosis:
         baseline_dE = extended_dE = np.zeros(0)
         attribution = None
     fallback_dE, fallback_model, fallback_protocol = _residual_lut_fallback(
-        extended, session, context, in_model, white)
+        extended, session_full, context, in_model, white)
     unexplained = unexplained_residual(context, extended, in_model, validation, white,
                                        np.atleast_1d(extended_dE))
     return Diagnosis(session=session, context=context, results=results, baseline=baseline,
@@ -265,13 +359,13 @@ def diagnose(session: Session) -> Diagnosis:
                      extended_dE=np.atleast_1d(extended_dE), protocol="holdout",
                      fallback_dE=fallback_dE, fallback_model=fallback_model,
                      fallback_protocol=fallback_protocol, attribution=attribution,
-                     unexplained=unexplained, cross_validation=cross_validation)
+                     unexplained=unexplained, cross_validation=cross_validation, apl=apl)
 
 
 def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None
                  ) -> tuple[DetectorResult, ...]:
     """Each significant effect's impact on :data:`FIXED_COLOURS`; found = significant and material."""
-    significant = [r.effect for r in results if r.significant]
+    significant = [r.effect for r in results if r.significant and r.effect != APL_EFFECT]
     if not significant:
         return results
     # an interaction whose shape the fit rows cannot identify is judged at the middle shape
@@ -281,7 +375,7 @@ def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None
     predicted = full.forward(FIXED_COLOURS)
     out = []
     for result in results:
-        if not result.significant:
+        if not result.significant or result.effect == APL_EFFECT:  # the APL test's own impact
             out.append(result)
             continue
         if result.effect == "temporal-drift":
