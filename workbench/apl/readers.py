@@ -51,6 +51,7 @@ __all__ = [
     "read_aw3225qf_white_windows",
     "is_samsung_apl_mat",
     "apl_session_reader",
+    "preset_of_white_window_file",
 ]
 
 SAMSUNG_FRAME_PX = (1920, 1080)
@@ -241,6 +242,12 @@ def read_aw3225qf_white_windows(path) -> Session:
                    window=window, surround=np.zeros_like(rgb),
                    metadata={"format": "aw3225qf-white-windows", "preset": mode,
                              "transfer": {"method": "pq", "gammas": [1.0] * 3, "peak_cd_m2": _PQ_PEAK_CD_M2}})
+
+
+def preset_of_white_window_file(path) -> str | None:
+    """The preset of an AW3225QF ``measure_<MODE>_<WIN>_patch.csv`` file, else ``None``."""
+    match = _WINDOW_FILE.match(Path(path).name)
+    return None if match is None else match.group(1)
 
 
 def apl_session_reader(path):

@@ -69,6 +69,7 @@ drift-corrected data, so drift cannot masquerade as another effect.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -665,8 +666,10 @@ def apl_dependence_result(session: Session | None, noise: NoiseModel) -> Detecto
     if not test.testable:
         return _untestable(APL_EFFECT, test.evidence.removeprefix("not testable: "))
     p = float(stdtr(noise.dof, -test.z))  # one-sided: the noise is estimated
+    # the test's own z is a normal one; the finding's is the Student t's (estimated noise)
+    evidence = re.sub(r"; z = -?[0-9.]+\)", ")", test.evidence)
     result = _result(APL_EFFECT, test.statistic, test.standard_error, p,
-                     f"{test.evidence} (the session's noise model: "
+                     f"{evidence} (the session's noise model: "
                      f"{100 * float(np.median(relative[relative < 1])):.2f} % median relative "
                      "luminance noise of these rows)",
                      {"rows": test.rows, "patches": test.patches,

@@ -6,7 +6,12 @@ runs :func:`~workbench.diagnostics.diagnose` and
 :func:`~workbench.diagnostics.argyll.score_argyll` on the same session: the
 findings with z and impact, baseline / extended / fallback held-out mean and
 p95 ΔE00, and ArgyllCMS's shaper + matrix profile fitted on exactly the same
-fit rows and scored on the same held-out rows. ``python -m workbench bench
+fit rows and scored on the same held-out rows. The OLED brightness-limiting
+sets (``oled-apl/``: the Samsung ``.mat``, the AW3225QF ColorChecker
+directory and one entry per white-window preset) have no full-field ramps:
+they are diagnosed for ``apl-dependence`` alone
+(:func:`~workbench.diagnostics.load_only.diagnose_what_it_can`), with the APL
+curve's held-out error (leave one window size or surround level out). ``python -m workbench bench
 real-data`` prints it (``--markdown`` for the README's table).
 
 The folder is ``$VR_WORKBENCH_SHARED/data/real`` or ``shared/data/real``
@@ -34,12 +39,25 @@ def default_real_data_folder() -> Path:
 
 
 def real_data_files(folder: Path) -> list[Path]:
-    """Every file under ``folder`` a session reader is registered for (sorted), directories excluded."""
+    """Every file under ``folder`` a session reader is registered for (sorted), and the APL sets.
+
+    Directories are excluded unless an APL reader reads them (the AW3225QF
+    ColorChecker windows); of the AW3225QF white-window CSVs, one per preset
+    (its reader reads every window size of the preset).
+    """
+    from workbench.apl.readers import apl_session_reader, preset_of_white_window_file
     from workbench.session_readers import SESSION_READERS
 
-    return sorted(path for path in folder.rglob("*") if path.is_file()
-                  and path.suffix.lower() in SESSION_READERS and path.suffix.lower() != ".json"
-                  and path.suffix.lower() != ".csv")
+    files = [path for path in folder.rglob("*") if path.is_file()
+             and path.suffix.lower() in SESSION_READERS and path.suffix.lower() != ".json"
+             and path.suffix.lower() != ".csv"]
+    files += [path for path in folder.rglob("*") if path.is_dir() and apl_session_reader(path)]
+    presets = {}
+    for path in sorted(folder.rglob("*.csv")):
+        preset = preset_of_white_window_file(path)
+        if preset is not None:
+            presets.setdefault((path.parent, preset), path)
+    return sorted(files + list(presets.values()))
 
 
 @dataclass(frozen=True)
@@ -54,6 +72,7 @@ class RealDataRow:
     fallback: dict | None = None
     fallback_protocol: str = ""
     argyll: dict | None = None
+    apl_holdout: tuple = ()  # (by, % luminance, ΔE00, without: % luminance, ΔE00)
     noise: str = ""
     error: str = ""
     seconds: float = 0.0
@@ -88,6 +107,10 @@ class RealDataRow:
                 "untested": list(self.untested), "baseline": self.baseline,
                 "extended": self.extended, "fallback": self.fallback,
                 "fallback_protocol": self.fallback_protocol, "argyll": self.argyll,
+                "apl_holdout": [{"by": by, "luminance_error_pct": lum, "mean_dE00": dE,
+                                 "without_load_term": {"luminance_error_pct": lum0,
+                                                       "mean_dE00": dE0}}
+                                for by, lum, dE, lum0, dE0 in self.apl_holdout],
                 "noise": self.noise, "beats_argyll": self.beats_argyll,
                 "extended_not_worse_than_baseline": self.extended_not_worse,
                 "error": self.error or None, "seconds": self.seconds}
@@ -126,6 +149,14 @@ class RealDataTable:
                          f"{_figures(row.extended)} | {_figures(row.fallback)} | {argyll} | "
                          f"{verdict} |")
         lines.append("")
+        held = [r for r in self.rows if r.apl_holdout and not r.error]
+        if held:
+            lines.append("APL curve held out (leave one condition out; mean error in % of "
+                         "luminance / ΔE00, without a load term in brackets): "
+                         + "; ".join(f"`{r.file}` " + ", ".join(
+                             f"by {by} {lum:.1f} % / {dE:.2f} ({lum0:.1f} % / {dE0:.2f})"
+                             for by, lum, dE, lum0, dE0 in r.apl_holdout) for r in held) + ".")
+            lines.append("")
         lines.append("Mean / p95 ΔE00 on the held-out (validation) colours; fallback protocols: "
                      + "; ".join(f"`{r.file}` {r.fallback_protocol.split(':')[0]}" for r in self.rows
                                  if r.fallback_protocol) + ".")
@@ -153,26 +184,32 @@ class RealDataTable:
                          f"Argyll shaper + matrix {argyll}"
                          + ("" if row.beats_argyll is None else
                             f" → ours {'beats' if row.beats_argyll else 'does not beat'} Argyll"))
+            for by, lum, dE, lum0, dE0 in row.apl_holdout:
+                lines.append(f"    APL curve, leave one {by} out: {lum:.1f} % of luminance, "
+                             f"{dE:.2f} ΔE00 (without a load term {lum0:.1f} %, {dE0:.2f})")
         return "\n".join(lines)
 
 
 def _row(path: Path, folder: Path, with_argyll: bool) -> RealDataRow:
-    from workbench.diagnostics import diagnose
     from workbench.diagnostics.argyll import ArgyllError, score_argyll
+    from workbench.diagnostics.load_only import LoadOnlyDiagnosis, diagnose_what_it_can
     from workbench.session_readers import read_session
 
     name = str(path.relative_to(folder))
     started = time.perf_counter()
     try:
         session = read_session(path)
-        diagnosis = diagnose(session)
+        diagnosis = diagnose_what_it_can(session)
     except (InputError, SpectrumFileError, ValueError) as error:
         # the first clause of the message, the file by its name in the table
         reason = str(error).splitlines()[0].split("; ")[0].replace(str(path), name)
         return RealDataRow(file=name, error=reason)
     document = diagnosis.to_json()
     argyll = None
-    if with_argyll:
+    load_only = isinstance(diagnosis, LoadOnlyDiagnosis)
+    if with_argyll and load_only:
+        argyll = {"unavailable": "no full-field ramps to fit a profile on", "mean_dE00": None}
+    elif with_argyll:
         try:
             argyll = score_argyll(session).to_json()
         except ArgyllError as error:
@@ -183,9 +220,14 @@ def _row(path: Path, folder: Path, with_argyll: bool) -> RealDataRow:
         findings=tuple((f["effect"], f["z"] or 0.0, f["impact_dE00"] or 0.0, f["in_model"])
                        for f in document["findings"]),
         untested=tuple(f"{u['effect']}: {u['reason']}" for u in document["untested"]),
-        baseline=document["baseline"]["validation"], extended=document["extended"]["validation"],
+        baseline=None if load_only else document["baseline"]["validation"],
+        extended=None if load_only else document["extended"]["validation"],
         fallback=None if fallback is None else fallback["validation"],
         fallback_protocol="" if fallback is None else fallback["protocol"], argyll=argyll,
+        apl_holdout=tuple((h["by"], h["luminance_error_pct"], h["mean_dE00"],
+                           h["without_load_term"]["luminance_error_pct"],
+                           h["without_load_term"]["mean_dE00"])
+                          for h in ((document.get("apl") or {}).get("holdout") or [])),
         noise=document["noise"]["summary"], seconds=time.perf_counter() - started)
 
 
