@@ -58,3 +58,48 @@ def generate_session(loss, seed, relative_noise=0.002):
     XYZ *= 1.0 + relative_noise * rng.standard_normal((len(XYZ), 1))
     return Session(kind=np.array(kinds, dtype=object), rgb=rgb, XYZ=XYZ, window=window, surround=surround,
                    source=f"generated APL session (loss {loss:.3f}, seed {seed})")
+
+
+RAMP_LEVELS = (16, 32, 48, 64, 96, 128, 160, 192, 224, 255)
+"""Levels of the full-field single-channel ramps and greys of :func:`generate_paper_apl_session`."""
+
+
+def truth_XYZ(rgb, window, surround, loss):
+    """The generator's noiseless display: XYZ of ``rgb`` as ``window`` on ``surround``."""
+    rgb = np.asarray(rgb, dtype=float).reshape(-1, 3)
+    window = np.asarray(window, dtype=float).reshape(-1)
+    surround = np.asarray(surround, dtype=float).reshape(-1, 3)
+    linear = (rgb / 255.0) ** 2.2
+    load = (window[:, None] * linear + (1 - window[:, None]) * (surround / 255.0) ** 2.2) @ SRGB_TO_XYZ[1]
+    return WHITE_CD_M2 * (linear @ SRGB_TO_XYZ.T) * limiter_gain(load, loss)[:, None]
+
+
+def generate_paper_apl_session(loss, seed, relative_noise=0.002, validation=40):
+    """A full-field calibration (black, white references, ramps, greys, validation colours) and the
+    APL frames of :func:`frames`, measured on the generator's display with limiter ``loss``.
+
+    The full-field patches are at their own reference load, so a model fitted on them is exact
+    there; the APL frames show the same patches at other loads.
+    """
+    rng = np.random.default_rng([seed, 31])
+    rows = [("black", (0, 0, 0), 1.0, (0, 0, 0))] * 3
+    for c, kind in enumerate(("ramp-r", "ramp-g", "ramp-b")):
+        for level in RAMP_LEVELS:
+            dac = [0, 0, 0]
+            dac[c] = level
+            rows.append((kind, tuple(dac), 1.0, (0, 0, 0)))
+        rows.append(("white", (255, 255, 255), 1.0, (0, 0, 0)))
+    rows += [("grey", (level,) * 3, 1.0, (0, 0, 0)) for level in RAMP_LEVELS[:-1]]
+    rows += [("validation", tuple(v), 1.0, (0, 0, 0))
+             for v in rng.integers(0, 256, size=(validation, 3))]
+    rows += frames()
+    kinds, rgb, window, surround = zip(*rows)
+    rgb = np.array(rgb, dtype=float)
+    window = np.array(window)
+    surround = np.array(surround, dtype=float)
+    XYZ = truth_XYZ(rgb, window, surround, loss)
+    XYZ = XYZ * (1.0 + relative_noise * rng.standard_normal((len(XYZ), 1))) \
+        + 1e-4 * rng.standard_normal(XYZ.shape)
+    return Session(kind=np.array(kinds, dtype=object), rgb=rgb, XYZ=XYZ, window=window,
+                   surround=surround, t_s=4.0 * np.arange(1, len(rgb) + 1),
+                   source=f"generated paper+APL session (loss {loss:.3f}, seed {seed})")

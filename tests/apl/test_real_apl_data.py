@@ -83,3 +83,37 @@ def test_aw3225qf_custom_preset_shows_no_limiting():
     test = detect_apl_dependence(session, INSTRUMENT_NOISE)
     assert abs(test.statistic) < 0.01, test.evidence
     assert abs(test.z) < 3, test.evidence
+
+
+@pytest.mark.parametrize("name", ["SamsungOLED_calib_2014-09-29.mat", "AW3225QF",
+                                  "AW3225QF/cc_measure_lumi-0100_win-003.csv"])
+def test_diagnose_names_apl_dependence_with_the_curves_held_out_error(name, capsys):
+    from workbench.cli import main
+
+    assert main(["diagnose", str(REAL / name)]) == 0
+    out = capsys.readouterr().out
+    assert "finding 1 apl-dependence" in out
+    assert "untested  tone-curve-shape: no display model" in out
+    held = [line for line in out.splitlines() if line.startswith("held out  leave one")]
+    assert held and all("% of luminance" in line and "ΔE00 mean" in line for line in held)
+
+
+def test_diagnose_will_not_export_a_profile_without_a_display_model(tmp_path, capsys):
+    from workbench.cli import main
+
+    assert main(["diagnose", str(REAL / "AW3225QF"), "--export",
+                 str(tmp_path / "p.vrprofile.json")]) != 0
+    assert "measure plan 'paper+apl'" in capsys.readouterr().err
+    assert not (tmp_path / "p.vrprofile.json").exists()
+
+
+def test_real_data_table_lists_both_sets_with_the_held_out_error():
+    from workbench.diagnostics.real_data import real_data_table
+
+    table = real_data_table(REAL, with_argyll=False)
+    rows = {row.file: row for row in table.rows}
+    for name in ("SamsungOLED_calib_2014-09-29.mat", "AW3225QF"):
+        row = rows[name]
+        assert not row.error and row.findings[0][0] == "apl-dependence", row
+        assert row.apl_holdout and all(lum < lum0 for _, lum, _, lum0, _ in row.apl_holdout)
+    assert "APL curve held out" in table.markdown()

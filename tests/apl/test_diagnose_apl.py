@@ -1,0 +1,90 @@
+"""apl-dependence through ``diagnose``: named with a load term on the independent generator, a held-out
+gain at loads the fit did not see, nothing on clean sessions, full-field rows for everything else."""
+
+import numpy as np
+import pytest
+
+from tests.apl.generator import generate_paper_apl_session, generate_session, truth_XYZ
+from workbench.diagnostics import diagnose, diagnose_what_it_can
+from workbench.diagnostics.detectors import family_size
+from workbench.diagnostics.load_only import LoadOnlyDiagnosis
+from workbench.diagnostics.significance import critical_p, z_of_p
+
+SEEDS = range(3)
+
+# frames none of the sessions measured: windows between the plan's, surrounds between its levels
+UNSEEN = [((255, 255, 255), 0.15, (0, 0, 0)), ((255, 255, 255), 0.6, (0, 0, 0)),
+          ((200, 200, 200), 0.9, (0, 0, 0)), ((255, 255, 255), 0.05, (96, 96, 96)),
+          ((230, 200, 30), 0.25, (0, 0, 0)), ((40, 90, 230), 0.1, (160, 160, 160)),
+          ((180, 60, 60), 0.5, (32, 32, 32))]
+
+
+def _loss(seed):
+    return float(np.random.default_rng([20, seed]).uniform(0.1, 0.4))
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_apl_limiting_is_named_with_a_load_term_and_a_held_out_gain(seed):
+    loss = _loss(seed)
+    diagnosis = diagnose(generate_paper_apl_session(loss, seed))
+    (apl,) = [f for f in diagnosis.findings if f.effect == "apl-dependence"]
+    assert apl.in_model and apl.impact_dE00 > 0.5 and apl.z > apl.critical_z
+    assert "leave one window size out" in apl.cross_validation
+    document = diagnosis.to_json()
+    assert any(t["effect"] == "apl-dependence" for t in document["extended"]["terms"])
+    assert document["apl"]["curve"]["model"] == "soft-power-cap"
+    for holdout in diagnosis.apl.holdouts:
+        assert holdout.luminance_error_pct < 0.5 * holdout.luminance_error_pct_without, holdout.one_line()
+    # patches at loads no row of the session was measured at
+    rgb, window, surround = (np.array(v, dtype=float) for v in zip(*UNSEEN))
+    truth = truth_XYZ(rgb, window, surround, loss)
+    with_term = diagnosis.forward_on_frame(rgb, window, surround)
+    without = diagnosis.extended.forward(rgb)  # the full-field prediction: no load term
+    error = np.abs(with_term[:, 1] / truth[:, 1] - 1)
+    error_without = np.abs(without[:, 1] / truth[:, 1] - 1)
+    assert error.mean() < 0.5 * error_without.mean(), (error, error_without)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_clean_sessions_with_apl_rows_give_no_apl_finding(seed):
+    diagnosis = diagnose(generate_paper_apl_session(0.0, seed))
+    (apl,) = [r for r in diagnosis.results if r.effect == "apl-dependence"]
+    assert apl.testable and not apl.found and not apl.in_model
+    assert diagnosis.apl is None and diagnosis.apl_curve is None
+    # the other detectors and the model read the full-field rows only, and a testable APL test
+    # is one more detector in the family-wise level
+    assert np.all(diagnosis.context.fit.window_or_full >= 1)
+    assert apl.critical_z == pytest.approx(z_of_p(critical_p(family_size(True))))
+
+
+def test_sessions_without_windows_keep_their_level_and_say_apl_is_untestable():
+    from workbench.simulated_sessions import simulate_session
+
+    diagnosis = diagnose(simulate_session({}, seed=3))
+    assert ("apl-dependence" in dict(diagnosis.untested)
+            and "'apl'" in dict(diagnosis.untested)["apl-dependence"])
+    tested = [r for r in diagnosis.results if r.testable]
+    assert tested and all(r.critical_z == pytest.approx(z_of_p(critical_p(5))) for r in tested)
+
+
+def test_exact_copies_are_not_independent_measurements():
+    session = generate_paper_apl_session(0.25, 7)
+    doubled = session.subset(np.r_[np.arange(len(session)), np.arange(len(session))])
+    z = [next(r.z for r in diagnose(s).results if r.effect == "apl-dependence")
+         for s in (session, doubled)]
+    assert z[1] == pytest.approx(z[0], rel=1e-6)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_session_with_apl_rows_and_no_ramps_is_diagnosed_for_apl_alone(seed):
+    diagnosis = diagnose_what_it_can(generate_session(_loss(seed), seed))
+    assert isinstance(diagnosis, LoadOnlyDiagnosis)
+    assert [f.effect for f in diagnosis.findings] == ["apl-dependence"]
+    assert {e for e, _ in diagnosis.untested} == {"temporal-drift", "black-offset",
+                                                  "channel-interaction", "chromaticity-shift",
+                                                  "tone-curve-shape"}
+    assert all("no display model" in why for _, why in diagnosis.untested)
+    document = diagnosis.to_json()
+    assert document["baseline"] is None and document["apl"]["holdout"]
+    clean = diagnose_what_it_can(generate_session(0.0, seed))
+    assert clean.findings == () and clean.apl is None
