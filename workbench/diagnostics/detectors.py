@@ -100,7 +100,7 @@ __all__ = [
     "FULL_FIELD_DETECTORS",
     "apl_dependence_result",
     "detect_apl_dependence_in_context",
-    "tested_detector_count",
+    "family_size",
     "DetectorResult",
     "DiagnosisContext",
     "DETECTORS",
@@ -218,7 +218,7 @@ def _result(effect, statistic, standard_error, p_value, evidence, details, z=Non
                           float(z), np.inf, True, evidence, details=details)
 
 
-def tested_detector_count(apl_testable: bool) -> int:
+def family_size(apl_testable: bool) -> int:
     """Detectors the family-wise level divides among: all, the APL test only when testable."""
     return len(DETECTORS) - (0 if apl_testable else 1)
 
@@ -241,7 +241,7 @@ def build_context(fit_session: Session, drift_found: bool | None = None,
     if drift_found is None:
         test = detect_temporal_drift_raw(drift, time_basis, noise)
         apl = load_session is not None and _load_rows_count(load_session) > 0
-        drift_found = test.testable and test.p_value <= critical_p(tested_detector_count(apl))
+        drift_found = test.testable and test.p_value <= critical_p(family_size(apl))
     if drift is not None and drift_found:
         # the correction follows the references only as far as they rise above their noise
         drift = drift.smoothed_to_noise(noise.sd_Y(drift.luminances) / drift.luminances)
@@ -705,7 +705,7 @@ def run_detectors(fit_session: Session, noise: NoiseModel | None = None,
     ramps runs ``apl-dependence`` alone).
     """
     context = build_context(fit_session, noise=noise, load_session=load_session)
-    level = critical_p(tested_detector_count(context.apl_testable), FAMILY_ALPHA)
+    level = critical_p(family_size(context.apl_testable), FAMILY_ALPHA)
     critical = z_of_p(level)
     results = []
     for effect, detector in DETECTORS.items():

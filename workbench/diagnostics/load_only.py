@@ -25,7 +25,7 @@ from workbench.diagnostics.detectors import (
     FULL_FIELD_DETECTORS,
     DetectorResult,
     apl_dependence_result,
-    tested_detector_count,
+    family_size,
 )
 from workbench.diagnostics.noise import NoiseModel, copy_rows, estimate_noise
 from workbench.diagnostics.selection import (
@@ -91,7 +91,7 @@ class LoadOnlyDiagnosis:
             "untested": [{"effect": e, "reason": why} for e, why in self.untested],
             "noise": self.noise.to_json(),
             "significance": {"family_alpha": FAMILY_ALPHA, "method": "Bonferroni over the "
-                             f"{tested_detector_count(True)} detectors (the untested ones "
+                             f"{family_size(True)} detectors (the untested ones "
                              "counted too)",
                              "materiality_floor_dE00": MATERIALITY_FLOOR_DE00,
                              "materiality_colours": "each patch at its lowest and its highest "
@@ -118,7 +118,7 @@ def diagnose_load_only(session: Session, why: str = "") -> LoadOnlyDiagnosis:
     rows = subset_with_labels(session, ~session.mask("validation"))
     rows = subset_with_labels(rows, ~copy_rows(rows))  # exact copies are not measurements
     noise = estimate_noise(rows)
-    level = critical_p(tested_detector_count(True), FAMILY_ALPHA)
+    level = critical_p(family_size(True), FAMILY_ALPHA)
     result = apl_dependence_result(rows, noise)
     apl = None
     if result.testable:

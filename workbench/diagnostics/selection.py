@@ -39,7 +39,7 @@ from workbench.diagnostics.detectors import (
     DiagnosisContext,
     build_context,
     run_detectors,
-    tested_detector_count,
+    family_size,
 )
 from workbench.diagnostics.cross_validation import select_terms
 from workbench.diagnostics.extension import (
@@ -186,7 +186,7 @@ class Diagnosis:
             "untested": [{"effect": e, "reason": why} for e, why in self.untested],
             "noise": self.context.noise.to_json(),
             "significance": {"family_alpha": FAMILY_ALPHA, "method": "Bonferroni over the "
-                             f"{tested_detector_count(self.context.apl_testable)} detectors",
+                             f"{family_size(self.context.apl_testable)} detectors",
                              "materiality_floor_dE00": MATERIALITY_FLOOR_DE00,
                              "materiality_colours": "5×5×5 cube of DAC values 0, 64, 128, 191, 255"},
             "cross_validation": {k: v for k, v in self.cross_validation.items()
