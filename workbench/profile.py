@@ -46,6 +46,7 @@ __all__ = [
     "MAX_PROFILE_BYTES",
     "RUNTIME_COLOUR_SPACE",
     "ProfileError",
+    "check_apl_block",
     "check_display_parameters",
     "parse_profile_text",
     "Profile",
@@ -183,6 +184,24 @@ def check_display_parameters(model_type: str, parameters: dict, source: str = "p
     return model
 
 
+def check_apl_block(block: dict, source: str = "profile") -> None:
+    """Refuse an ``apl`` block whose curve cannot be evaluated (e.g. power shares not summing to 1)."""
+    import numpy as np
+
+    from workbench.apl.predict import apl_curve_from_json
+    from workbench.errors import InputError
+
+    try:
+        curve = apl_curve_from_json(block)
+        gains = curve.relative_gain(np.array([[255.0, 255.0, 255.0], [128.0, 64.0, 32.0]]),
+                                    np.array([0.1, 1.0]), np.zeros((2, 3)))
+    except InputError as error:
+        raise ProfileError(f"{source}: apl: {error}") from None
+    if not np.all(np.isfinite(gains) & (gains > 0)):
+        raise ProfileError(f"{source}: apl: the curve's gains are not finite and positive; "
+                           "re-export the profile from its session")
+
+
 def parse_profile_text(text: str, source: str = "profile") -> "Profile":
     """Parse and fully validate a profile's JSON text (what :func:`load_profile` reads)."""
     def refuse_constant(name):
@@ -225,6 +244,7 @@ class Profile:
     level2: dict | None = None
     lut3d: dict | None = None
     runtime: dict | None = field(default_factory=lambda: {"colour_space": RUNTIME_COLOUR_SPACE})
+    apl: dict | None = None
     created: str = ""
     software: str = f"vr-colour-workbench {__version__}"
 
@@ -238,6 +258,16 @@ class Profile:
     def display_model(self) -> DisplayModel:
         """The display model the profile describes."""
         return display_model_from_parameters(self.display_model_type, self.display_parameters)
+
+    def apl_curve(self):
+        """The profile's APL curve (:class:`~workbench.apl.curve.AplCurve`), or None.
+
+        The display model and the light tables hold at the reference load
+        (each patch full field); the curve says how a patch on another frame differs.
+        """
+        from workbench.apl.predict import apl_curve_from_json
+
+        return None if self.apl is None else apl_curve_from_json(self.apl)
 
     @property
     def k(self) -> float:
@@ -278,6 +308,8 @@ class Profile:
             document["lut3d"] = self.lut3d
         if self.runtime is not None:
             document["runtime"] = self.runtime
+        if self.apl is not None:
+            document["apl"] = self.apl
         return document
 
     @classmethod
@@ -286,6 +318,8 @@ class Profile:
         validate_profile_document(document, source)
         model = document["display_model"]
         check_display_parameters(model["type"], model["parameters"], source)
+        if document.get("apl") is not None:
+            check_apl_block(document["apl"], source)
         return cls(
             device=document["device"], display_model_type=model["type"],
             display_parameters=model["parameters"], white_XYZ=tuple(model["white_XYZ"]),
@@ -294,6 +328,7 @@ class Profile:
             diagnosis=document.get("diagnosis"), engine=document["engine"],
             lights=tuple(document["lights"]), level2=document.get("level2"),
             lut3d=document.get("lut3d"), runtime=document.get("runtime"),
+            apl=document.get("apl"),
             created=document.get("created", ""),
             software=document["software"])
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from workbench.errors import InputError
 
-__all__ = ["register", "export_profile"]
+__all__ = ["register", "export_profile", "apl_block"]
 
 
 def register(subparsers) -> None:
@@ -53,8 +53,21 @@ def export_profile(diagnosis, path) -> Path:
         validation=None if score is None else {**score.to_json(), "protocol": diagnosis.protocol},
         diagnosis={"findings": [{"effect": f.effect, "evidence": f.evidence, "score": f.score}
                                 for f in diagnosis.findings]},
+        apl=apl_block(diagnosis),
     ).with_lights(PAPER_SOURCES)
     return save_profile(profile, path)
+
+
+def apl_block(diagnosis) -> dict | None:
+    """The profile's ``apl`` block: the APL curve and its held-out scores, where it is in the model."""
+    if getattr(diagnosis, "apl", None) is None or diagnosis.apl.curve is None:
+        return None
+    return {**diagnosis.apl.curve.to_json(),
+            "held_out": [{"by": h.by, "luminance_error_pct": h.luminance_error_pct,
+                          "mean_dE00": h.dE00,
+                          "without_load_term": {"luminance_error_pct": h.luminance_error_pct_without,
+                                                "mean_dE00": h.dE00_without}}
+                         for h in diagnosis.apl.holdouts]}
 
 
 def _finding_line(i, finding) -> str:
