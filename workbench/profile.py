@@ -47,6 +47,7 @@ __all__ = [
     "RUNTIME_COLOUR_SPACE",
     "ProfileError",
     "check_apl_block",
+    "LIGHTS_LOAD",
     "check_display_parameters",
     "parse_profile_text",
     "Profile",
@@ -331,6 +332,12 @@ class Profile:
             apl=document.get("apl"),
             created=document.get("created", ""),
             software=document["software"])
+
+
+LIGHTS_LOAD = "light colours hold at the reference load: each patch full field"
+"""At which frame load the level-1 light colours (and the display model) hold: an OLED that
+limits its power (``apl-dependence``) shows a colour dimmer on a more lit frame (the profile's
+``apl`` block says by how much)."""
 
 
 def light_entries(illuminant_ids, display: DisplayModel, *, k: float = DEFAULT_K,

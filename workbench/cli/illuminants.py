@@ -76,15 +76,30 @@ def _list(args) -> int:
     return 0
 
 
+def _load_note(profile) -> str:
+    """At which load the profile's light colours hold, and what the APL curve says off it."""
+    from workbench.profile import LIGHTS_LOAD
+
+    curve = profile.apl_curve()
+    if curve is None:
+        return LIGHTS_LOAD + " (the profile has no APL curve)"
+    white = curve.relative_gain([[255.0, 255.0, 255.0]], [0.1], [[0.0, 0.0, 0.0]])[0]
+    return (LIGHTS_LOAD + f"; the profile's APL curve: a white in a 10 % window on black "
+            f"shows {white:.2f}× its full-field output")
+
+
 def _show(args) -> int:
     illuminant = get_illuminant(args.id)
-    display = None
+    display = profile = None
     if args.profile:
         from workbench.profile import load_profile
 
-        display = load_profile(args.profile).display_model()
+        profile = load_profile(args.profile)
+        display = profile.display_model()
     metrics = illuminant_metrics(illuminant, display, k=args.k, observer=args.observer)
     record = metrics.to_json()
+    if profile is not None:
+        record["load"] = _load_note(profile)
     if args.spectrum:
         record["spectrum"] = {"wavelength": illuminant.wavelengths.tolist(),
                               "value": illuminant.values.tolist()}
@@ -102,6 +117,8 @@ def _show(args) -> int:
     print(f"  light rgb8: sRGB {metrics.rgb8_srgb}"
           + (f"   {metrics.display} {metrics.rgb8_display}" if display is not None else "")
           + ("" if metrics.light_in_gamut else "   (clipped: outside the display gamut)"))
+    if profile is not None:
+        print(f"  ({_load_note(profile)})")
     if metrics.observer != "cie1931-2":
         print("  (light colours and level-1 errors: for the display's CIE 1931 2° observer)")
     for a in metrics.level1:

@@ -166,7 +166,33 @@ def _readme(profile: Profile, manifest: dict, accuracy: CubeAccuracy) -> str:
                     else "This model's drive is affine in XYZ: no correction table"),
         inverse_identical=f"{100 * manifest['runtime_inverse']['identical_share']:.2f}",
         inverse_max=manifest["runtime_inverse"]["max_counts"],
+        apl=_apl_text(manifest["apl"]),
         version=BUNDLE_FORMAT_VERSION)
+
+
+def _apl_text(block: dict | None) -> str:
+    """The bundle README's account of the APL curve (or of its absence)."""
+    if block is None:
+        return ("This profile holds no APL curve (`apl` is null in `bundle.json`): its diagnosis "
+                "found no `apl-dependence`, or its calibration showed every patch full field, "
+                "so nothing says how the display changes with the frame's load.")
+    shares = ", ".join(f"{v:.3g}" for v in block["power_shares"])
+    transfer = block["transfer"]
+    lin = ("(DAC/255)^γ_c with γ = " + ", ".join(f"{g:.3g}" for g in transfer["gammas"])
+           if transfer["method"] == "power" else
+           f"ST 2084 (PQ) of DAC/255 over {transfer['peak_cd_m2']:g} cd/m²")
+    held = "; ".join(f"leave one {h['by']} out: {h['luminance_error_pct']:.1f} % of luminance, "
+                     f"{h['mean_dE00']:.2f} ΔE00" for h in block.get("held_out", []))
+    return (f"`bundle.json` `apl` (also in the profile) is this display's APL curve: a frame of "
+            f"load L shows gain(L) = (1 + (L/{block['knee']:.4g})^{block['sharpness']:.4g})"
+            f"^(−{block['exponent']:.4g}/{block['sharpness']:.4g}) of what it shows at load 0. "
+            f"The load is L = Σ_c s_c · mean over the frame's pixels of lin_c(DAC_c), with "
+            f"lin_c = {lin} and power shares s = ({shares}) (0 = black, 1 = full-field white). "
+            "Every table of this bundle holds at the reference load: each colour shown full "
+            "field (its own L_ref = Σ_c s_c lin_c(DAC_c)). A runtime compensates a frame of "
+            "load L by scaling a colour's linear output by gain(L_ref)/gain(L) (as far as the "
+            "drive has headroom; a pixel at DAC 255 cannot be raised)."
+            + (f" Held out: {held}." if held else ""))
 
 
 def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None = None,
@@ -278,7 +304,7 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
                     "runtime_inverse": inverse_accuracy.to_json(),
                     "white_mapping_XYZ": [float(v) for v in white],
                     "lights_file": "lights.json", "lights": list(light_ids),
-                    "cubes": level2, "apl": None}
+                    "cubes": level2, "apl": profile.apl}
         with atomic_writer(staging / "README.md") as handle:
             handle.write(_readme(bundle_profile, manifest, accuracy))
         _write_json(staging / "bundle.json", manifest)

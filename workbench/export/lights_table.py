@@ -5,13 +5,14 @@ One record per source: ``id``, ``name``, ``rgb8`` (the engine light colour,
 engine uses it, linear 0..1), ``XYZ`` (the perfect diffuser under the source,
 ``Y = k · Y_white``, display scale), ``in_gamut``, ``Rf`` (CIE 2017) and
 ``CCT`` (K) — the profile's own light entries
-(:func:`workbench.profile.light_entries`) plus the linear colour.
+(:func:`workbench.profile.light_entries`) plus the linear colour; ``load``
+says at which frame load they hold (:data:`workbench.profile.LIGHTS_LOAD`).
 """
 
 from __future__ import annotations
 
 from workbench.display import srgb_decode
-from workbench.profile import Profile, light_entries
+from workbench.profile import LIGHTS_LOAD, Profile, light_entries
 
 __all__ = ["LIGHTS_FORMAT", "lights_table"]
 
@@ -28,4 +29,4 @@ def lights_table(profile: Profile, illuminant_ids) -> dict:
         lights.append({**entry, "linear": [round(float(v), 8) for v in linear]})
     return {"format": LIGHTS_FORMAT, "format_version": 1, "device": profile.device.get("name", ""),
             "k": profile.k, "observer": profile.observer,
-            "xyz_scale": profile.xyz_scale, "lights": lights}
+            "xyz_scale": profile.xyz_scale, "load": LIGHTS_LOAD, "lights": lights}
