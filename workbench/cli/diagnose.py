@@ -29,9 +29,14 @@ def register(subparsers) -> None:
     parser.set_defaults(handler=_diagnose)
 
     predict = subparsers.add_parser(
-        "predict", help="XYZ a profile predicts for DAC values (CSV r,g,b on stdin), or --inverse",
-        description="Read CSV r,g,b (0..255, optional header) on standard input; write CSV "
-                    "X,Y,Z on standard output, as the profile's display model predicts. With "
+        "predict", help="XYZ a profile predicts for DAC values (CSV r,g,b[,window[,sr,sg,sb]] on "
+                        "stdin), or --inverse",
+        description="Read CSV r,g,b[,window[,sr,sg,sb]] (DAC 0..255; window: the patch's fraction "
+                    "of the field, default 1 = full field; sr,sg,sb: the surround's DAC values, "
+                    "default black; optional header naming the columns) on standard input; write "
+                    "CSV X,Y,Z on standard output, as the profile's display model predicts, times "
+                    "the profile's APL curve gain(L)/gain(L_ref) for a window or a lit surround "
+                    "(a profile without an APL curve predicts full-field patches only). With "
                     "--inverse, read X,Y,Z (the profile's scale) and write the float DAC r,g,b "
                     "of the display inverse (the function display_inverse.cube samples; out of "
                     "gamut: clipped per channel, counted on standard error).")
@@ -251,7 +256,8 @@ def _read_triplets(what: str, example: str) -> np.ndarray:
 def _predict(args) -> int:
     from workbench.profile import load_profile
 
-    model = load_profile(args.profile).display_model()
+    profile = load_profile(args.profile)
+    model = profile.display_model()
     writer = csv.writer(sys.stdout, lineterminator="\n")
     if args.inverse:
         XYZ = _read_triplets("X,Y,Z", "40,42,45")
@@ -264,7 +270,10 @@ def _predict(args) -> int:
             print(f"{clipped} of {len(XYZ)} colour(s) outside the display gamut: clipped per "
                   "channel in linear drive", file=sys.stderr)
         return 0
-    XYZ = model.forward(_read_triplets("r,g,b", "255,128,0"))
+    from workbench.apl.predict import predict_XYZ_on_surround, read_predict_rows
+
+    XYZ = predict_XYZ_on_surround(model.forward, read_predict_rows(sys.stdin.read()),
+                                  profile.apl_curve())
     writer.writerow(["X", "Y", "Z"])
     for value in XYZ:
         writer.writerow([f"{v:.6g}" for v in value])
