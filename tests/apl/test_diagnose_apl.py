@@ -88,3 +88,83 @@ def test_a_session_with_apl_rows_and_no_ramps_is_diagnosed_for_apl_alone(seed):
     assert document["baseline"] is None and document["apl"]["holdout"]
     clean = diagnose_what_it_can(generate_session(0.0, seed))
     assert clean.findings == () and clean.apl is None
+
+
+@pytest.fixture(scope="module")
+def apl_profile(tmp_path_factory):
+    from workbench.cli.diagnose import export_profile
+
+    diagnosis = diagnose(generate_paper_apl_session(0.3, 1))
+    return diagnosis, export_profile(diagnosis, tmp_path_factory.mktemp("apl") / "p.vrprofile.json")
+
+
+def test_the_profile_records_the_apl_curve_and_predict_applies_it(apl_profile, capsys, monkeypatch):
+    import io
+    import json
+
+    from workbench.cli import main
+    from workbench.profile import load_profile
+
+    diagnosis, path = apl_profile
+    profile = load_profile(path)
+    block = json.loads(path.read_text())["apl"]
+    assert block["reference_load"].startswith("each patch full field")
+    assert {h["by"] for h in block["held_out"]} == {"window size", "surround level"}
+    assert profile.apl_curve().knee == pytest.approx(diagnosis.apl.curve.knee)
+    rows = "r,g,b,window,sr,sg,sb\n255,255,255,1,0,0,0\n255,255,255,0.1,0,0,0\n200,100,50,0.3,64,64,64\n"
+    monkeypatch.setattr("sys.stdin", io.StringIO(rows))
+    assert main(["predict", str(path)]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    XYZ = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    rgb = np.array([[255, 255, 255], [255, 255, 255], [200, 100, 50]], dtype=float)
+    expected = diagnosis.forward_on_frame(rgb, np.array([1, 0.1, 0.3]),
+                                          np.array([[0, 0, 0], [0, 0, 0], [64, 64, 64]]))
+    np.testing.assert_allclose(XYZ, expected, rtol=1e-5)
+    assert XYZ[1, 1] > 1.05 * XYZ[0, 1]  # a small white window is brighter than full field
+
+
+def test_predict_without_an_apl_curve_refuses_windows(capsys, monkeypatch):
+    import io
+    from pathlib import Path
+
+    from workbench.cli import main
+
+    paper = Path(__file__).resolve().parents[2] / "profiles" / "htc-vive-paper.vrprofile.json"
+    monkeypatch.setattr("sys.stdin", io.StringIO("255,255,255,0.1\n"))
+    assert main(["predict", str(paper)]) != 0
+    assert "no APL curve" in capsys.readouterr().err
+
+
+def test_a_bad_apl_block_is_refused_by_name(apl_profile):
+    import json
+
+    from workbench.profile import ProfileError, parse_profile_text
+
+    _, path = apl_profile
+    document = json.loads(path.read_text())
+    for change, match in [({"knee": -1.0}, "knee"), ({"power_shares": [0.5, 0.5, 0.5]}, "sum to 1"),
+                          ({"transfer": {"method": "linear", "gammas": [1, 1, 1], "peak_cd_m2": 1}},
+                           "method")]:
+        broken = {**document, "apl": {**document["apl"], **change}}
+        with pytest.raises(ProfileError, match=match):
+            parse_profile_text(json.dumps(broken), "broken")
+
+
+def test_the_bundle_carries_the_apl_curve_and_the_light_tables_say_their_load(apl_profile, tmp_path,
+                                                                              capsys):
+    import json
+
+    from workbench.cli import main
+    from workbench.export.bundle import write_bundle
+    from workbench.profile import LIGHTS_LOAD, load_profile
+
+    _, path = apl_profile
+    write_bundle(load_profile(path), tmp_path / "bundle", lut_size=9)
+    manifest = json.loads((tmp_path / "bundle" / "bundle.json").read_text())
+    assert manifest["apl"] == json.loads(path.read_text())["apl"]
+    assert json.loads((tmp_path / "bundle" / "lights.json").read_text())["load"] == LIGHTS_LOAD
+    readme = (tmp_path / "bundle" / "README.md").read_text()
+    assert "gain(L_ref)/gain(L)" in readme and "reference load" in readme
+    assert main(["illuminants", "show", "cie-d65", "--profile", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert LIGHTS_LOAD in out and "10 % window" in out
