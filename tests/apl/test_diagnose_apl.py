@@ -168,3 +168,11 @@ def test_the_bundle_carries_the_apl_curve_and_the_light_tables_say_their_load(ap
     assert main(["illuminants", "show", "cie-d65", "--profile", str(path)]) == 0
     out = capsys.readouterr().out
     assert LIGHTS_LOAD in out and "10 % window" in out
+
+
+def test_the_report_gives_the_apl_curves_held_out_error(apl_profile):
+    from workbench.diagnostics.report import render_report
+
+    diagnosis, _ = apl_profile
+    page = render_report(diagnosis)
+    assert "APL curve (load term)" in page and "leave one window size out" in page

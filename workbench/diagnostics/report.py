@@ -167,6 +167,11 @@ def render_report(diagnosis: Diagnosis) -> str:
                ("CIEDE2000 before and after", _histogram_figure(diagnosis))]
     images = "".join(f"<h2>{title}</h2><img alt='{title}' src='{_png(figure)}'>"
                      for title, figure in figures if figure is not None)
+    apl = ("" if diagnosis.apl is None else
+           "<h2>APL curve (load term)</h2><ul>"
+           + "".join(f"<li>{html.escape(h.one_line())}</li>" for h in diagnosis.apl.holdouts)
+           + "</ul><p>The model holds at the reference load (each patch full field); a patch "
+             "on a frame of load L shows gain(L)/gain(L_ref) of its prediction.</p>")
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <title>Display diagnosis — {html.escape(Path(diagnosis.session.source).name)}</title>
@@ -191,6 +196,7 @@ improves a {diagnosis.cross_validation.get("folds", 5)}-fold cross-validated pre
 <h2>Findings</h2><ol>{items}</ol>
 <h3>Checked, not found</h3><ul>{not_found or "<li>—</li>"}</ul>
 <h3>Not tested</h3><ul>{untested or "<li>—</li>"}</ul>
+{apl}
 {images}
 <p><small>vr-colour-workbench {__version__}</small></p></body></html>
 """
