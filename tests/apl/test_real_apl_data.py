@@ -117,3 +117,16 @@ def test_real_data_table_lists_both_sets_with_the_held_out_error():
         assert not row.error and row.findings[0][0] == "apl-dependence", row
         assert row.apl_holdout and all(lum < lum0 for _, lum, _, lum0, _ in row.apl_holdout)
     assert "APL curve held out" in table.markdown()
+
+
+def test_diagnose_json_on_a_session_without_a_display_model(capsys):
+    import json
+
+    from workbench.cli import main
+
+    assert main(["diagnose", str(REAL / "SamsungOLED_calib_2014-09-29.mat"), "--json"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["baseline"] is None and document["extended"] is None
+    assert [f["effect"] for f in document["findings"]] == ["apl-dependence"]
+    assert {h["by"] for h in document["apl"]["holdout"]} == {"stabilizer level", "bias size"}
+    assert len(document["untested"]) == 5
