@@ -62,17 +62,22 @@ def simulate_session(effects: dict | None = None, seed: int = 0, *,
         plan = measurement_plan(plan, seed)
     rgb = np.array([patch.rgb for patch in plan.patches], dtype=float)
     kinds = np.array([patch.kind for patch in plan.patches], dtype=object)
+    # APL patches: a window of the field on a surround (full field on black otherwise)
+    window = np.array([patch.window for patch in plan.patches], dtype=float)
+    surround = np.array([patch.surround for patch in plan.patches], dtype=float)
     headset = SimulatedHeadset(effects, seed=unit_seed, white_luminance=white_luminance)
     # the session clock: each patch is measured after the previous one ended
-    clean = headset.radiance(rgb, 0.0)
+    clean = headset.radiance(rgb, 0.0, window=window, surround=surround)
     timing = InstrumentTimingModel()
     durations = np.array([timing.measurement_s(spectrum) for spectrum in clean])
     t_end = np.cumsum(durations)
     headset.session_length_s = float(t_end[-1])
-    spectra = np.stack([headset.radiance(rgb[i], float(t_end[i])) for i in range(len(rgb))])
+    spectra = np.stack([headset.radiance(rgb[i], float(t_end[i]), window=window[i],
+                                         surround=surround[i]) for i in range(len(rgb))])
     rng = np.random.default_rng([seed, 7411])
     spectra = instrument_noise(spectra, rng, repeatability=repeatability)
     return Session(kind=kinds, rgb=rgb, XYZ=radiance_to_XYZ(spectra), t_s=t_end,
+                   window=window, surround=surround,
                    wavelengths=headset.wavelengths if keep_spectra else None,
                    spectra=spectra if keep_spectra else None,
                    source=f"simulated: {headset.describe()}, plan {plan.name}, seed {seed}",

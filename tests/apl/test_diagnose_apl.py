@@ -176,3 +176,14 @@ def test_the_report_gives_the_apl_curves_held_out_error(apl_profile):
     diagnosis, _ = apl_profile
     page = render_report(diagnosis)
     assert "APL curve (load term)" in page and "leave one window size out" in page
+
+
+@pytest.mark.parametrize("effects, named", [({"apl-dependence": 0.25}, True), ({}, False)])
+def test_the_simulated_headset_measured_on_paper_apl_shows_its_windows(effects, named):
+    """simulate_session shows each patch in its window on its surround, as the runner does."""
+    from workbench.simulated_sessions import simulate_session
+
+    session = simulate_session(effects, seed=4, plan="paper+apl")
+    assert (session.window < 1).any() and (session.surround > 0).any()
+    diagnosis = diagnose(session)
+    assert ("apl-dependence" in {f.effect for f in diagnosis.findings}) is named
