@@ -32,11 +32,14 @@ def test_opening_a_ti3_sets_the_session_and_its_diagnosis_and_emits_in_order():
     workspace = Workspace()
     seen = _events(workspace)
     loaded = workspace.open_path(REAL / "dell-up2516d-displaycal.ti3")
-    assert seen == ["session-changed", "diagnosis-changed"]
+    assert seen == ["session-changed", "diagnosis-changed", "profile-changed"]
     assert workspace.session is loaded.session and workspace.diagnosis is loaded.diagnosis
     assert workspace.session_path == REAL / "dell-up2516d-displaycal.ti3"
     assert workspace.diagnosis.to_json()["session"]["validation"] == 108
-    assert workspace.profile_path is None  # a session does not replace the profile
+    # the display just opened becomes the current profile (its diagnosed model), unsaved
+    assert workspace.profile_path is None
+    assert workspace.profile.device["source"] == loaded.session.source
+    assert workspace.profile.display_model_type == workspace.diagnosis.extended.model_id
 
 
 def test_opening_a_profile_makes_it_current_and_diagnoses_its_primaries():

@@ -59,6 +59,8 @@ __all__ = [
     "paper_vive_profile",
     "SIMULATED_HEADSET_EFFECTS",
     "simulated_headset_profile",
+    "profile_from_diagnosis",
+    "apl_block",
 ]
 
 PROFILE_FORMAT = "vr-colour-workbench-profile"
@@ -433,6 +435,44 @@ def paper_vive_profile() -> Profile:
     return profile.with_lights(PAPER_SOURCES)
 
 
+def profile_from_diagnosis(diagnosis) -> Profile:
+    """The profile of a diagnosis: what ``diagnose SESSION --export PROFILE`` writes.
+
+    The extended model (the baseline's when nothing was found), its held-out
+    validation figures, the findings, the APL curve where it is in the model,
+    and level-1 lights for the paper's sources.
+
+    Parameters
+    ----------
+    diagnosis : workbench.diagnostics.Diagnosis
+        A session's diagnosis.
+    """
+    from workbench.illuminants import PAPER_SOURCES
+
+    score = diagnosis.extended_score
+    return Profile.from_display_model(
+        diagnosis.extended,
+        device={"name": Path(diagnosis.session.source).stem or "display",
+                "source": diagnosis.session.source},
+        validation=None if score is None else {**score.to_json(), "protocol": diagnosis.protocol},
+        diagnosis={"findings": [{"effect": f.effect, "evidence": f.evidence, "score": f.score}
+                                for f in diagnosis.findings]},
+        apl=apl_block(diagnosis),
+    ).with_lights(PAPER_SOURCES)
+
+
+def apl_block(diagnosis) -> dict | None:
+    """The profile's ``apl`` block: the APL curve and its held-out scores, where it is in the model."""
+    if getattr(diagnosis, "apl", None) is None or diagnosis.apl.curve is None:
+        return None
+    return {**diagnosis.apl.curve.to_json(),
+            "held_out": [{"by": h.by, "luminance_error_pct": h.luminance_error_pct,
+                          "mean_dE00": h.dE00,
+                          "without_load_term": {"luminance_error_pct": h.luminance_error_pct_without,
+                                                "mean_dE00": h.dE00_without}}
+                         for h in diagnosis.apl.holdouts]}
+
+
 SIMULATED_HEADSET_EFFECTS = {"channel-interaction": 0.1, "black-offset": 0.006}
 """The effects hidden in the simulated headset of ``make demo`` and the shipped simulated profile."""
 
@@ -447,13 +487,13 @@ def simulated_headset_profile(seed: int = 1) -> Profile:
     """
     import tempfile
 
-    from workbench.cli.diagnose import export_profile
     from workbench.diagnostics import diagnose
     from workbench.simulated_sessions import simulate_session
 
     diagnosis = diagnose(simulate_session(dict(SIMULATED_HEADSET_EFFECTS), seed=seed))
-    with tempfile.TemporaryDirectory() as folder:
-        profile = load_profile(export_profile(diagnosis, Path(folder) / "p.vrprofile.json"))
+    with tempfile.TemporaryDirectory() as folder:  # written and read back, as a user's export is
+        profile = load_profile(save_profile(profile_from_diagnosis(diagnosis),
+                                            Path(folder) / "p.vrprofile.json"))
     effects = ", ".join(f"{name} {value:g}" for name, value in SIMULATED_HEADSET_EFFECTS.items())
     return replace(profile, device={
         "name": "Simulated headset (make demo)",

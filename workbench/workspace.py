@@ -94,13 +94,19 @@ class LoadedPath:
     session : Session
     diagnosis : Diagnosis
     profile : Profile or None
-        Set when ``path`` is a ``.vrprofile.json``.
+        The file's profile when ``path`` is a ``.vrprofile.json``; otherwise
+        the diagnosis's model as a profile (what ``diagnose --export`` would
+        write), not yet saved.
+    profile_path : Path or None
+        Where ``profile`` is stored: ``path`` for a profile file, None for an
+        unsaved one.
     """
 
     path: Path
     session: object
     diagnosis: object
     profile: object = None
+    profile_path: Path | None = None
 
 
 def is_profile_file(path: str | Path) -> bool:
@@ -132,16 +138,21 @@ def load_path(path: str | Path) -> LoadedPath:
         If the file cannot be read or diagnosed; the message names it and the fix.
     """
     from workbench.diagnostics import diagnose
-    from workbench.profile import load_profile
+    from workbench.profile import load_profile, profile_from_diagnosis
     from workbench.session_readers import read_session
 
     path = Path(path)
     if not path.exists():
         raise WorkbenchError(f"{path}: no such file or directory; choose a session CSV, .ti3, .mat, "
                              "a measurement directory or a .vrprofile.json")
-    profile = load_profile(path) if is_profile_file(path) else None
+    if is_profile_file(path):
+        session = read_session(path)
+        return LoadedPath(path, session, diagnose(session), load_profile(path), path)
     session = read_session(path)
-    return LoadedPath(path, session, diagnose(session), profile)
+    diagnosis = diagnose(session)
+    # the headset just measured becomes the current profile (unsaved until exported), so
+    # the gamut, the light colours and the scene show this display, not the previous one
+    return LoadedPath(path, session, diagnosis, profile_from_diagnosis(diagnosis), None)
 
 
 def unfinished_journal(directory: str | Path):
@@ -228,7 +239,7 @@ class Workspace:
         self.set_session(loaded.session, loaded.path)
         self.set_diagnosis(loaded.diagnosis)
         if loaded.profile is not None:
-            self.set_profile(loaded.profile, loaded.path)
+            self.set_profile(loaded.profile, loaded.profile_path)
 
     def open_path(self, path: str | Path) -> LoadedPath:
         """Read, diagnose and apply ``path`` (see :func:`load_path`); returns what was read."""
@@ -248,11 +259,10 @@ class Workspace:
         WorkbenchError
             If there is no diagnosis yet, or the profile does not validate.
         """
-        from workbench.cli.diagnose import export_profile
-        from workbench.profile import load_profile
+        from workbench.profile import load_profile, profile_from_diagnosis, save_profile
 
         if self.diagnosis is None:
             raise WorkbenchError("nothing to export: calibrate, or open a session (File ▸ Open), first")
-        written = export_profile(self.diagnosis, path)
+        written = save_profile(profile_from_diagnosis(self.diagnosis), path)
         self.set_profile(load_profile(written), written)
         return Path(written)

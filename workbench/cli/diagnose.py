@@ -12,7 +12,7 @@ import numpy as np
 
 from workbench.errors import InputError
 
-__all__ = ["register", "export_profile", "apl_block"]
+__all__ = ["register", "export_profile"]
 
 
 def register(subparsers) -> None:
@@ -47,32 +47,10 @@ def register(subparsers) -> None:
 
 
 def export_profile(diagnosis, path) -> Path:
-    from workbench.illuminants import PAPER_SOURCES
-    from workbench.profile import Profile, save_profile
+    """Write the profile of ``diagnosis`` (:func:`workbench.profile.profile_from_diagnosis`) to ``path``."""
+    from workbench.profile import profile_from_diagnosis, save_profile
 
-    score = diagnosis.extended_score
-    profile = Profile.from_display_model(
-        diagnosis.extended,
-        device={"name": Path(diagnosis.session.source).stem or "display",
-                "source": diagnosis.session.source},
-        validation=None if score is None else {**score.to_json(), "protocol": diagnosis.protocol},
-        diagnosis={"findings": [{"effect": f.effect, "evidence": f.evidence, "score": f.score}
-                                for f in diagnosis.findings]},
-        apl=apl_block(diagnosis),
-    ).with_lights(PAPER_SOURCES)
-    return save_profile(profile, path)
-
-
-def apl_block(diagnosis) -> dict | None:
-    """The profile's ``apl`` block: the APL curve and its held-out scores, where it is in the model."""
-    if getattr(diagnosis, "apl", None) is None or diagnosis.apl.curve is None:
-        return None
-    return {**diagnosis.apl.curve.to_json(),
-            "held_out": [{"by": h.by, "luminance_error_pct": h.luminance_error_pct,
-                          "mean_dE00": h.dE00,
-                          "without_load_term": {"luminance_error_pct": h.luminance_error_pct_without,
-                                                "mean_dE00": h.dE00_without}}
-                         for h in diagnosis.apl.holdouts]}
+    return save_profile(profile_from_diagnosis(diagnosis), path)
 
 
 def _finding_line(i, finding) -> str:

@@ -339,7 +339,12 @@ class MainWindow(QMainWindow):
     def _update_title(self) -> None:
         ws = self.workspace
         session = ws.session_path.name if ws.session_path else "no session"
-        profile = ws.profile_path.name if ws.profile_path else ws.profile.device.get("name", "profile")
+        if ws.profile_path:
+            profile = ws.profile_path.name
+        else:
+            profile = ws.profile.device.get("name", "profile")
+            if ws.session is not None and ws.profile.device.get("source") == getattr(ws.session, "source", None):
+                profile += " (the session's model, not saved yet)"
         self.setWindowTitle(f"VR colour workbench — {session} — profile: {profile}")
 
     def _update_status(self) -> None:
