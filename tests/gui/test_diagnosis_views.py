@@ -29,7 +29,9 @@ def test_a_finding_card_carries_every_field_the_finding_has_and_entries_naming_i
     }
     card, = views.finding_cards(_Diagnosis(document))
     assert card.effect == "future-effect" and card.evidence == "it is there"
-    assert dict(card.fields) == {"z": "4.25", "impact_dE00": "0.5", "extended.terms: term": "a new term"}
+    # the statistics the card knows read as one line; any other field is shown as it is
+    assert dict(card.fields) == {"test": "z 4.2 · impact 0.50 ΔE00 on the fixed colours",
+                                 "extended.terms: term": "a new term"}
     assert card.plot is None  # no plot is registered for an effect the page does not know
     assert ("noise", "relative_sd_Y 0.001") in views.detail_lines(_Diagnosis(document))
 
@@ -59,3 +61,14 @@ def test_srgb_swatches_show_the_display_white_as_white_and_clip_what_is_outside(
 def test_the_verdict_names_session_and_both_models(summary):
     diagnosis = load_path(PROFILE).diagnosis
     assert summary in dict(views.summary_lines(diagnosis))
+
+
+def test_a_checked_effect_reads_as_its_test_and_its_evidence():
+    record = {"effect": "temporal-drift", "evidence": "the whites vary by 0.3 %", "score": -0.4,
+              "statistic": 0.0032, "standard_error": 0.0015, "z": -0.86, "p_value": 0.81,
+              "critical_z": 2.33, "threshold": 0.0036, "impact_dE00": None, "significant": False,
+              "testable": True, "in_model": False, "cross_validation": "", "form": "warm-up"}
+    (name, text), = views.detail_lines(_Diagnosis({"checked": [record]}))
+    assert name == "checked"
+    assert text == ("temporal-drift: z -0.9 < 2.33 (family-wise 5 %), p 0.81 · statistic 0.0032 ± 0.0015"
+                    " · not in the model — the whites vary by 0.3 % (form warm-up)")

@@ -286,13 +286,47 @@ def _entries_naming(value, effect: str, path: str):
             yield from _entries_naming(item, effect, path)
 
 
+HEADLINE_KEYS = ("z", "critical_z", "p_value", "statistic", "standard_error", "impact_dE00",
+                 "significant", "testable", "in_model")
+"""Statistics a record's headline states in words (:func:`evidence_headline`); not repeated as fields."""
+
+
+def evidence_headline(record: dict) -> str:
+    """A test's result in one line: significance, effect size ± SE, impact, whether it is modelled.
+
+    Uses only what the record has (any of :data:`HEADLINE_KEYS`), so records of
+    other shapes give a shorter line, never an error.
+    """
+    if record.get("testable") is False:  # an untested effect has no statistics to state
+        return "not testable"
+    parts = []
+    z, critical = record.get("z"), record.get("critical_z")
+    if isinstance(z, (int, float)):
+        test = f"z {z:.1f}"
+        if isinstance(critical, (int, float)):
+            test += f" {'≥' if z >= critical else '<'} {critical:.2f} (family-wise 5 %)"
+        if isinstance(record.get("p_value"), (int, float)):
+            test += f", p {record['p_value']:.2g}"
+        parts.append(test)
+    statistic, error = record.get("statistic"), record.get("standard_error")
+    if isinstance(statistic, (int, float)):
+        parts.append(f"statistic {statistic:.4g}" + (f" ± {error:.2g}" if isinstance(error, (int, float)) else ""))
+    if isinstance(record.get("impact_dE00"), (int, float)):
+        parts.append(f"impact {record['impact_dE00']:.2f} ΔE00 on the fixed colours")
+    if "in_model" in record:
+        parts.append("in the extended model" if record["in_model"] else "not in the model")
+    return " · ".join(parts)
+
+
 def finding_cards(diagnosis) -> tuple:
     """One card per finding in ``diagnosis.to_json()["findings"]``, with every field it has."""
     document = diagnosis.to_json()
     cards = []
     for finding in document.get("findings", []):
         effect = str(finding.get("effect", "?"))
-        fields = [(k, _text(v)) for k, v in finding.items() if k not in ("effect", "evidence")]
+        fields = [("test", evidence_headline(finding))]
+        fields += [(k, _text(v)) for k, v in finding.items()
+                   if k not in ("effect", "evidence", *HEADLINE_KEYS) and v not in (None, "")]
         for where, entry in _entries_naming({k: v for k, v in document.items() if k != "findings"}, effect, ""):
             fields += [(f"{where}: {k}", _text(v)) for k, v in entry.items() if k != "effect"]
         plot = FINDING_PLOTS.get(effect)
@@ -326,6 +360,19 @@ def summary_lines(diagnosis) -> tuple:
     return tuple(lines)
 
 
+def _record_line(record: dict) -> str:
+    """A record naming an effect as ``effect: headline — evidence`` (or its reason); others as fields."""
+    if "effect" not in record:
+        return _text(record)
+    headline = evidence_headline(record)
+    said = record.get("evidence") or record.get("reason") or ""
+    rest = {k: v for k, v in record.items()
+            if k not in ("effect", "evidence", "reason", "score", "threshold", *HEADLINE_KEYS)
+            and v not in (None, "")}
+    text = f"{record['effect']}: " + " — ".join(p for p in (headline, str(said)) if p)
+    return text + (f" ({_text(rest)})" if rest else "")
+
+
 def detail_lines(diagnosis) -> tuple:
     """Every other top-level entry of ``to_json()`` (findings aside) as ``(name, text)``; a list of
     records gives one line per record."""
@@ -334,7 +381,7 @@ def detail_lines(diagnosis) -> tuple:
         if key in VERDICT_KEYS or key == "findings" or value is None:
             continue
         if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
-            lines += [(key, _text(v)) for v in value]
+            lines += [(key, _record_line(v)) for v in value]
         else:
             lines.append((key, _text(value)))
     return tuple(lines)
