@@ -29,7 +29,12 @@ from PySide6.QtWidgets import QApplication
 from workbench.errors import WorkbenchError
 from workbench.gui.patch_window import PatchWindow, QtPatchDisplay
 
-__all__ = ["PatchWindowUnavailableError", "patch_window_unavailable_reason", "run_with_patch_window"]
+__all__ = [
+    "PatchWindowUnavailableError",
+    "WorkerPatchDisplay",
+    "patch_window_unavailable_reason",
+    "run_with_patch_window",
+]
 
 _LOG = logging.getLogger(__name__)
 
@@ -87,11 +92,12 @@ def _application() -> QApplication:
     return app
 
 
-class _WorkerPatchDisplay:
-    """The patch display handed to the worker: shows through the window, never closes it.
+class WorkerPatchDisplay:
+    """The patch display handed to a worker thread: shows through the window, never closes it.
 
     Its description is taken in the GUI thread, where the window may be asked
-    which screen it is on; :func:`run_with_patch_window` closes the window.
+    which screen it is on; whoever opened the window (:func:`run_with_patch_window`,
+    the Calibrate page) closes it.
     """
 
     def __init__(self, display: QtPatchDisplay):
@@ -103,7 +109,7 @@ class _WorkerPatchDisplay:
         self._display.show(rgb_dac, window=window, surround=surround)
 
     def close(self) -> None:
-        """Nothing: the window belongs to :func:`run_with_patch_window`."""
+        """Nothing: the window belongs to whoever opened it."""
 
     def describe(self) -> str:
         """The window and its screen, for the journal header."""
@@ -156,7 +162,7 @@ def run_with_patch_window(screen_index: int | None, work: Callable[[object], Res
     screens = QGuiApplication.screens()
     window = PatchWindow(len(screens) - 1 if screen_index is None else screen_index)
     try:
-        display = _WorkerPatchDisplay(QtPatchDisplay(window, timeout_s))  # shows the window full screen
+        display = WorkerPatchDisplay(QtPatchDisplay(window, timeout_s))  # shows the window full screen
         outcome: dict = {}
 
         def worker() -> None:

@@ -32,6 +32,7 @@ from PySide6.QtWidgets import (
 from workbench.errors import WorkbenchError
 from workbench.gui.calibration_setup import CalibrationSetup, planned
 from workbench.gui.diagnosis_views import XYZ_to_srgb8
+from workbench.gui.measure_window import WorkerPatchDisplay
 from workbench.gui.widgets.calibration_form import CalibrationForm
 from workbench.gui.widgets.measurement_plots import MeasurementPlots
 from workbench.gui.widgets.patch_swatch import SplitSwatch
@@ -51,24 +52,6 @@ from workbench.workspace import load_path, unfinished_journal
 __all__ = ["CalibratePage"]
 
 _LOG = logging.getLogger(__name__)
-
-
-class _WindowPatchDisplay:
-    """The patch window's display as the worker sees it: shows, never closes (the page closes the window)."""
-
-    def __init__(self, display):
-        self._display = display
-        self._description = display.describe()
-
-    def show(self, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> None:
-        """Show ``rgb_dac`` (as ``window`` of the screen on ``surround``); return once painted."""
-        self._display.show(rgb_dac, window=window, surround=surround)
-
-    def close(self) -> None:
-        """Nothing: the window belongs to the page."""
-
-    def describe(self) -> str:
-        return self._description
 
 
 class CalibratePage(QWidget):
@@ -219,7 +202,7 @@ class CalibratePage(QWidget):
 
             screen = len(QGuiApplication.screens()) - 1
         self._patch_window = PatchWindow(screen)
-        return _WindowPatchDisplay(QtPatchDisplay(self._patch_window, 10.0))
+        return WorkerPatchDisplay(QtPatchDisplay(self._patch_window, 10.0))
 
     def toggle_pause(self) -> None:
         if not self.running or self.worker is None:
