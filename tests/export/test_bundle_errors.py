@@ -72,6 +72,20 @@ DAMAGES = {
         ["texture", "paint", "--light", "cie-a"], "channels need"),
     "cubes not a list": (lambda b: _edit_json(b / "bundle.json", lambda d: d.update(cubes=3)),
                          ["texture", "paint", "--light", "cie-a"], "'cubes' must be a list"),
+    "cube with a word for a number": (
+        lambda b: (b / "display_inverse.cube").write_text(
+            (b / "display_inverse.cube").read_text().replace("LUT_3D_SIZE 33", "LUT_3D_SIZE x")),
+        ["cube", "1", "1", "1"], "not a complete .cube"),
+    "cube with a row of words": (
+        lambda b: (b / "display_inverse.cube").write_text(
+            (b / "display_inverse.cube").read_text() + "a b c\n"),
+        ["cube", "1", "1", "1"], "not a complete .cube"),
+    "cube with a NaN": (
+        lambda b: (b / "display_inverse.cube").write_text(
+            (b / "display_inverse.cube").read_text().replace("LUT_3D_SIZE 33\n",
+                                                             "LUT_3D_SIZE 33\nnan 0 0\n")
+            .rsplit("\n", 2)[0] + "\n"),
+        ["cube", "1", "1", "1"], "NaN or infinity"),
     "unknown light": (lambda b: None, ["light", "cie-f2"], "no light 'cie-f2'"),
     "unknown texture": (lambda b: None, ["texture", "../etc", "--light", "cie-a"],
                         "no level-2 texture '../etc'"),

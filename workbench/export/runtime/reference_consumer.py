@@ -235,17 +235,23 @@ def read_cube(path):
     size, rows = None, []
     if not Path(path).is_file():
         raise BundleError(f"{path}: missing from the bundle")
-    for line in Path(path).read_text(encoding="utf-8").splitlines():
-        text = line.strip()
-        if not text or text.startswith("#") or text.startswith("TITLE"):
-            continue
-        if text.startswith("LUT_3D_SIZE"):
-            size = int(text.split()[1])
-        else:
-            rows.append([float(v) for v in text.split()])
+    try:
+        for line in Path(path).read_text(encoding="utf-8").splitlines():
+            text = line.strip()
+            if not text or text.startswith("#") or text.startswith("TITLE"):
+                continue
+            if text.startswith("LUT_3D_SIZE"):
+                size = int(text.split()[1])
+            else:
+                rows.append([float(v) for v in text.split()])
+    except (UnicodeDecodeError, ValueError, IndexError):
+        size = None
     if size is None or size < 2 or len(rows) != size ** 3 or any(len(r) != 3 for r in rows):
         raise BundleError(f"{path}: not a complete .cube (LUT_3D_SIZE and N^3 rows of r g b)")
-    return np.asarray(rows, dtype=np.float32).reshape(size, size, size, 3)
+    table = np.asarray(rows, dtype=np.float32).reshape(size, size, size, 3)
+    if not np.all(np.isfinite(table)):
+        raise BundleError(f"{path}: holds NaN or infinity")
+    return table
 
 
 def write_png(path, rgb):
