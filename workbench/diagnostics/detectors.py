@@ -660,8 +660,7 @@ def apl_dependence_result(session: Session | None, noise: NoiseModel) -> Detecto
     if session is None or not session.has_surround_data:
         return _untestable(APL_EFFECT, "every patch was measured full field on black; measure "
                                        "plan 'apl' or 'paper+apl' (windows and surrounds)")
-    Y = np.abs(session.XYZ[:, 1])
-    relative = noise.sd_Y(Y) / np.maximum(Y, 1e-300)
+    relative = noise.relative_sd_Y(session.XYZ[:, 1])
     test = detect_apl_dependence(session, relative)
     if not test.testable:
         return _untestable(APL_EFFECT, test.evidence.removeprefix("not testable: "))

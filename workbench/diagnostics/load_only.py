@@ -17,8 +17,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from workbench.apl.diagnosis import AplDiagnosis, diagnose_apl, subset_with_labels
 from workbench.diagnostics.detectors import (
     APL_EFFECT,
@@ -126,8 +124,7 @@ def diagnose_load_only(session: Session, why: str = "") -> LoadOnlyDiagnosis:
         found = significant and (result.impact_dE00 or 0.0) >= MATERIALITY_FLOOR_DE00
         result = replace(result, critical_z=z_of_p(level), significant=significant, found=found)
         if found:
-            Y = np.abs(rows.XYZ[:, 1])
-            apl = diagnose_apl(rows, noise.sd_Y(Y) / np.maximum(Y, 1e-300))
+            apl = diagnose_apl(rows, noise.relative_sd_Y(rows.XYZ[:, 1]))
             note = ("; ".join(f"APL curve, {h.one_line()}" for h in apl.holdouts)
                     or "no window size or surround level could be held out")
             result = replace(result, in_model=True, cross_validation=note)

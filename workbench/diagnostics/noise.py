@@ -147,6 +147,11 @@ class NoiseModel:
         Y = np.abs(np.asarray(Y, dtype=float))
         return np.sqrt((self.gain_sd ** 2 + self.chroma_sd ** 2) * Y ** 2 + self.floor ** 2)
 
+    def relative_sd_Y(self, Y) -> np.ndarray:
+        """Standard deviation of one luminance measurement at ``Y`` relative to ``|Y|`` (``ΔY/Y``)."""
+        Y = np.abs(np.asarray(Y, dtype=float))
+        return self.sd_Y(Y) / np.maximum(Y, 1e-300)
+
     def sd_xy(self, XYZ) -> float:
         """Standard deviation of x (≈ of y) of one measurement of ``XYZ``."""
         XYZ = np.asarray(XYZ, dtype=float)

@@ -215,8 +215,7 @@ def _term_json(effect: str, diagnosis: "Diagnosis") -> dict:
 
 def load_relative_noise(context: DiagnosisContext) -> np.ndarray:
     """Each load row's relative luminance noise (one measurement), from the noise model."""
-    Y = np.abs(context.load_session.XYZ[:, 1])
-    return context.noise.sd_Y(Y) / np.maximum(Y, 1e-300)
+    return context.noise.relative_sd_Y(context.load_session.XYZ[:, 1])
 
 
 def _apl_part(context: DiagnosisContext, results) -> tuple[tuple, AplDiagnosis | None]:
@@ -261,11 +260,8 @@ def with_measurement_order(session: Session) -> Session:
     """
     if session.t_s is not None or session.metadata.get("format") in UNORDERED_FORMATS:
         return session
-    return Session(kind=session.kind, rgb=session.rgb, XYZ=session.XYZ,
-                   t_s=np.arange(len(session), dtype=float), wavelengths=session.wavelengths,
-                   spectra=session.spectra, source=session.source,
-                   metadata={**session.metadata, "time_basis": "row order"},
-                   window=session.window, surround=session.surround)
+    return replace(session, t_s=np.arange(len(session), dtype=float),
+                   metadata={**session.metadata, "time_basis": "row order"})
 
 
 UNORDERED_FORMATS = ("psychtoolbox", "profile")
