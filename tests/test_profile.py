@@ -27,6 +27,13 @@ def test_shipped_vive_profile_is_what_the_code_builds():
     assert shipped == json.loads(json.dumps(built))
 
 
+def test_shipped_simulated_profile_is_what_the_code_builds():
+    from workbench.profile import simulated_headset_profile
+
+    shipped = json.loads(example_profile_path("simulated-headset").read_text())
+    assert shipped == json.loads(json.dumps(simulated_headset_profile().to_document()))
+
+
 def test_vive_profile_model_follows_table1():
     model = load_profile(example_profile_path("htc-vive-paper")).display_model()
     xyY = []
