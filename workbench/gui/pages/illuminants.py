@@ -40,6 +40,7 @@ from workbench.gui.widgets_illuminants import (
     SourceTableModel,
     SpectraPlot,
 )
+from workbench.gui.workers import describe_error
 from workbench.illuminants import list_illuminants, read_illuminant_file, write_illuminant_file
 from workbench.illuminants.comparison import colorchecker_comparison, source_row
 from workbench.illuminants.user_library import UserLibrary, resolve_illuminant
@@ -48,12 +49,6 @@ __all__ = ["IlluminantsPage"]
 
 MEASURE_TIME_SCALE = 0.02
 """How long the simulated CS-2000 makes a measurement wait, as a fraction of the real timing."""
-
-
-def _error_text(error: BaseException) -> str:
-    if isinstance(error, WorkbenchError):
-        return str(error)
-    return f"{type(error).__name__}: {error}"
 
 
 class IlluminantsPage(QWidget):
@@ -73,7 +68,7 @@ class IlluminantsPage(QWidget):
         self.workspace = workspace
         self.library = library or UserLibrary()
         self._workers = []  # workbench.gui.jobs.Job
-        self._comparisons: dict[tuple, object] = {}
+        self._comparisons: dict[str, tuple] = {}  # source id: (comparison, name) for the current profile
         self._syncing = False
         self.last_error: str | None = None
 
@@ -184,7 +179,7 @@ class IlluminantsPage(QWidget):
         try:
             illuminant = read_illuminant_file(path)
         except WorkbenchError as error:
-            self._show_error("Cannot import the spectrum", _error_text(error))
+            self._show_error("Cannot import the spectrum", describe_error(error))
             return None
         return self._add_to_library(illuminant)
 
@@ -193,7 +188,7 @@ class IlluminantsPage(QWidget):
         try:
             write_illuminant_file(resolve_illuminant(source_id, self.library), path)
         except WorkbenchError as error:
-            self._show_error("Cannot export the spectrum", _error_text(error))
+            self._show_error("Cannot export the spectrum", describe_error(error))
             return
         self.status.setText(f"Wrote {source_id} to {path}")
 
@@ -204,7 +199,7 @@ class IlluminantsPage(QWidget):
         try:
             metamer = two_peak_metamer(resolve_illuminant(source_id, self.library))
         except WorkbenchError as error:
-            self._show_error("Cannot synthesize a metamer", _error_text(error))
+            self._show_error("Cannot synthesize a metamer", describe_error(error))
             return None
         new_id = self._add_to_library(metamer)
         self.workspace.set_selected_sources([source_id, new_id])
@@ -270,7 +265,7 @@ class IlluminantsPage(QWidget):
                 try:
                     row = source_row(resolve_illuminant(source_id, library), display, k=k)
                 except WorkbenchError as error:  # e.g. a user-library file edited by hand
-                    row = f"{source_id}: {_error_text(error)}"
+                    row = f"{source_id}: {describe_error(error)}"
                 yield i + 1, row
 
         worker = self._run(rows, yielded=self._on_row, generator=True)
@@ -304,7 +299,7 @@ class IlluminantsPage(QWidget):
 
     def _on_worker_error(self, error) -> None:
         self.measure_button.setEnabled(True)
-        self._show_error("The light source operation failed", _error_text(error))
+        self._show_error("The light source operation failed", describe_error(error))
 
     def _on_measured(self, measurement) -> None:
         self.measure_button.setEnabled(True)
@@ -376,14 +371,14 @@ class IlluminantsPage(QWidget):
             self._update_plot(ids)
             self._update_swatches(ids)
         except WorkbenchError as error:
-            self._show_error("Cannot show the selected sources", _error_text(error))
+            self._show_error("Cannot show the selected sources", describe_error(error))
 
     def _on_profile_changed(self) -> None:
         self._comparisons.clear()
         try:
             self._update_swatches(self.workspace.selected_sources)
         except WorkbenchError as error:
-            self._show_error("Cannot show the selected sources", _error_text(error))
+            self._show_error("Cannot show the selected sources", describe_error(error))
         self._start_rows()
 
     def _update_plot(self, ids) -> None:
@@ -392,16 +387,13 @@ class IlluminantsPage(QWidget):
     def _update_swatches(self, ids) -> None:
         profile = self.workspace.profile
         display = profile.display_model()
-        comparisons, names = [], {}
         for source_id in ids:
-            key = (source_id, id(profile))
-            if key not in self._comparisons:
+            if source_id not in self._comparisons:
                 illuminant = resolve_illuminant(source_id, self.library)
-                self._comparisons[key] = colorchecker_comparison(illuminant, display, k=profile.k)
-                self._comparisons[(source_id, "name")] = illuminant.name
-            comparisons.append(self._comparisons[key])
-            names[source_id] = self._comparisons[(source_id, "name")]
-        self.swatches.set_comparisons(comparisons, names)
+                self._comparisons[source_id] = (
+                    colorchecker_comparison(illuminant, display, k=profile.k), illuminant.name)
+        self.swatches.set_comparisons([self._comparisons[i][0] for i in ids],
+                                      {i: self._comparisons[i][1] for i in ids})
 
     # -- dialogs --------------------------------------------------------------------
     def _ask_import(self) -> None:
