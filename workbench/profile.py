@@ -189,8 +189,6 @@ def check_display_parameters(model_type: str, parameters: dict, source: str = "p
 
 def check_apl_block(block: dict, source: str = "profile") -> None:
     """Refuse an ``apl`` block whose curve cannot be evaluated (e.g. power shares not summing to 1)."""
-    import numpy as np
-
     from workbench.apl.predict import apl_curve_from_json
     from workbench.errors import InputError
 
@@ -214,15 +212,11 @@ def parse_profile_text(text: str, source: str = "profile") -> "Profile":
         raise ProfileError(f"{source}: {len(text)} characters is more than a profile holds "
                            f"(at most {MAX_PROFILE_BYTES} bytes); is this the right file?")
     try:
-        document = json.loads(text, parse_constant=refuse_constant)
+        return Profile.from_document(json.loads(text, parse_constant=refuse_constant), source)
     except json.JSONDecodeError as error:
         raise ProfileError(f"{source}, line {error.lineno}: not valid JSON ({error.msg}). "
                            "Export the profile again") from None
-    except RecursionError:
-        raise ProfileError(f"{source}: nested too deeply to be a profile") from None
-    try:
-        return Profile.from_document(document, source)
-    except RecursionError:
+    except RecursionError:  # in the parser or in validation
         raise ProfileError(f"{source}: nested too deeply to be a profile") from None
 
 
