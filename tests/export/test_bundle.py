@@ -185,6 +185,9 @@ def test_export_errors_name_the_input(tmp_path, vive_profile):
     with pytest.raises(WorkbenchError, match="no-such-light"):
         write_bundle(vive_profile, tmp_path / "b", light_ids=["no-such-light"])
     assert not (tmp_path / "b").exists()
+    (tmp_path / "a-file").write_text("mine")
+    with pytest.raises(InputError, match="cannot create a folder"):
+        write_bundle(vive_profile, tmp_path / "a-file" / "b", light_ids=["cie-d65"])
 
 
 @pytest.mark.slow

@@ -120,8 +120,13 @@ def _staged_directory(target: Path):
     if target.is_dir() and any(target.iterdir()) and not (target / "bundle.json").is_file():
         raise InputError(f"--bundle {target}: the folder holds files and is not a bundle; "
                          "give a new or empty folder (an existing bundle is replaced)")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.", suffix=".partial"))
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.",
+                                        suffix=".partial"))
+    except OSError as error:
+        raise InputError(f"--bundle {target}: cannot create a folder in {target.parent} "
+                         f"({error.strerror or error}); give a writable folder") from None
     mask = os.umask(0)
     os.umask(mask)
     os.chmod(staging, 0o777 & ~mask)  # a folder as mkdir makes it, not mkdtemp's 0700
@@ -131,7 +136,12 @@ def _staged_directory(target: Path):
         if target.exists():
             old = target.parent / f".{target.name}.old-{os.getpid()}"
             os.replace(target, old)
-        os.replace(staging, target)
+        try:
+            os.replace(staging, target)
+        except OSError:
+            if old is not None:
+                os.replace(old, target)  # the earlier bundle stays, whole
+            raise
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
     finally:
@@ -239,9 +249,9 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
         taken.add(name)
         loaded.append((name, cube))
 
+    table = display_inverse_table(display, profile.k, lut_size)   # checks lut_size first
     inverse = runtime_display_inverse(display)
     inverse_accuracy = runtime_inverse_accuracy(inverse, display)
-    table = display_inverse_table(display, profile.k, lut_size)
     accuracy = cube_accuracy(table, display, profile.k)
     white = white_mapping_XYZ(display, profile.k)
     lut3d = {"file": "display_inverse.cube", "size": lut_size, "direction": "sRGB_to_DAC",
