@@ -21,7 +21,6 @@ whole, so a reader never sees half a bundle):
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import re
 import shutil
@@ -47,6 +46,7 @@ from workbench.export.level2_files import (
     DEFAULT_IDENTICAL_SHARE,
     choose_cube_basis,
     level2_light,
+    write_json,
     write_level2_cube,
 )
 from workbench.export.lights_table import lights_table
@@ -146,12 +146,6 @@ def _staged_directory(target: Path):
             shutil.rmtree(old, ignore_errors=True)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
-
-
-def _write_json(path: Path, document: dict) -> None:
-    with atomic_writer(path) as handle:
-        json.dump(document, handle, indent=1)
-        handle.write("\n")
 
 
 def _readme(profile: Profile, manifest: dict, accuracy: CubeAccuracy) -> str:
@@ -286,12 +280,12 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
                                   "red fastest; trilinear vs exact inverse, in gamut: mean "
                                   f"dE00 {accuracy.mean_dE00:.4f}, p95 {accuracy.p95_dE00:.4f}, "
                                   f"max {accuracy.max_dE00:.4f}"])
-        _write_json(staging / "display_inverse.json",
+        write_json(staging / "display_inverse.json",
                     {**inverse.to_json(), "accuracy": inverse_accuracy.to_json()})
         if inverse.correction is not None:
             with atomic_writer(staging / "display_drive_correction.bin", "wb") as handle:
                 handle.write(np.ascontiguousarray(inverse.correction, dtype="<f4").tobytes())
-        _write_json(staging / "lights.json", lights_table(bundle_profile, light_ids))
+        write_json(staging / "lights.json", lights_table(bundle_profile, light_ids))
         for name, cube in loaded:
             basis, choice = choose_cube_basis(cube, display, illuminants, inverse, k=profile.k,
                                               observer=profile.observer,
@@ -317,7 +311,7 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
                     "cubes": level2, "apl": profile.apl}
         with atomic_writer(staging / "README.md") as handle:
             handle.write(_readme(bundle_profile, manifest, accuracy))
-        _write_json(staging / "bundle.json", manifest)
+        write_json(staging / "bundle.json", manifest)
     return BundleSummary(directory=directory, lights=light_ids, cube_accuracy=accuracy,
                          cubes=tuple(level2), drive_correction=inverse.correction is not None,
                          inverse_accuracy=inverse_accuracy)

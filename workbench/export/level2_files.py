@@ -75,6 +75,7 @@ __all__ = [
     "encode_channels",
     "runtime_level2_texels",
     "choose_cube_basis",
+    "write_json",
     "write_level2_cube",
 ]
 
@@ -343,7 +344,8 @@ def choose_cube_basis(cube: ReflectanceCube, display: DisplayModel, illuminants:
                                   MappingProxyType(tried), target_share, probe_share, len(held))
 
 
-def _write_json(path: Path, document: dict) -> None:
+def write_json(path: Path, document: dict) -> None:
+    """Write ``document`` as indented JSON, atomically (every JSON file of a bundle)."""
     with atomic_writer(path) as handle:
         json.dump(document, handle, indent=1)
         handle.write("\n")
@@ -375,15 +377,15 @@ def write_level2_cube(directory, name: str, cube: ReflectanceCube, basis: Spectr
                         "component i%4; channel_component[i] is the basis coefficient it holds "
                         "(channels K.. hold the float16 rounding error of the first coefficients); "
                         "padding channels are 0"}
-    _write_json(folder / "coefficients.json", header)
-    _write_json(folder / "basis.json", {
+    write_json(folder / "coefficients.json", header)
+    write_json(folder / "basis.json", {
         "wavelengths": basis.wavelengths.tolist(), "mean": basis.mean.tolist(),
         "vectors": basis.vectors.tolist(), "observer": basis.observer,
         "sources": list(basis.sources), "components": K,
         "held_out_max_dE00": dict(basis.held_out.max_dE00),
         "choice": None if choice is None else choice.to_json(),
         "cube": cube.source})
-    _write_json(folder / "lights.json", {"components": K, "channels": channels, "layers": layers,
+    write_json(folder / "lights.json", {"components": K, "channels": channels, "layers": layers,
                                          "lights": [light.to_json() for light in lights]})
     write_png_rgb8(folder / "preview.png", authored_srgb8_cube(cube),
                    {"Description": f"authored sRGB under D65 of {cube.source}"})
