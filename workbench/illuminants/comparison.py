@@ -21,11 +21,10 @@ import colour
 import numpy as np
 
 from workbench.colorimetry import DEFAULT_K, white_XYZ_relative
-from workbench.colour_management import light_colour, target_dac
+from workbench.colour_management import light_colour
 from workbench.display import DisplayModel, SRGBDisplay
 from workbench.illuminants.metrics import CCT_Duv, fidelity_Rf_Rg
 from workbench.illuminants.source import Illuminant
-from workbench.samples import colorchecker
 
 __all__ = ["SourceRow", "PatchComparison", "source_row", "colorchecker_comparison"]
 
@@ -88,17 +87,14 @@ def source_row(illuminant: Illuminant, display: DisplayModel, *, k: float = DEFA
 def colorchecker_comparison(illuminant: Illuminant, display: DisplayModel, *,
                             k: float = DEFAULT_K) -> PatchComparison:
     """The ColorChecker under ``illuminant`` at both levels on ``display``, with ΔE00 per patch."""
-    from workbench.display import quantize_dac
     from workbench.scene.errors import patch_errors
     from workbench.scene.images import headset_to_monitor_rgb8
 
     errors = patch_errors(illuminant, display, k=k)
-    dac_t, _ = target_dac(colorchecker().reflectances, illuminant.sd, display, k=k,
-                          observer=display.observer)
     level1, level2 = errors.level(1), errors.level(2)
     return PatchComparison(
         source=illuminant.id, names=tuple(p.name for p in level1),
-        target_rgb8=headset_to_monitor_rgb8(quantize_dac(dac_t), display),
+        target_rgb8=headset_to_monitor_rgb8(np.array([p.target_dac for p in level1]), display),
         level1_rgb8=headset_to_monitor_rgb8(np.array([p.engine_dac for p in level1]), display),
         level2_rgb8=headset_to_monitor_rgb8(np.array([p.engine_dac for p in level2]), display),
         level1_dE00=np.array([p.dE00 for p in level1]),
