@@ -6,7 +6,7 @@ import pytest
 from workbench.display import GammaMatrixDisplay, SRGBDisplay
 from workbench.errors import InputError
 from workbench.export import runtime_display_inverse
-from workbench.export.runtime_inverse import sample_trilinear
+from workbench.export.runtime_inverse import UNREACHED_THRESHOLD, sample_trilinear
 
 
 def _random_colours(display, count=50000, seed=3):
@@ -48,6 +48,14 @@ def test_thresholds_rise_and_mark_unreached_levels():
     assert thresholds.shape == (3, 255) and thresholds.dtype == np.float32
     assert np.all(np.diff(thresholds, axis=1) >= 0)
     assert np.all(thresholds <= 1.0)
+
+    class Dim(SRGBDisplay):                      # never drives past DAC 250
+        def dac_from_drive(self, drive):
+            return 250.0 * np.clip(np.asarray(drive, dtype=float), 0, 1)
+
+    dim = runtime_display_inverse(Dim()).thresholds
+    assert np.all(dim[:, :250] <= 1.0)
+    assert np.all(dim[:, 250:] == UNREACHED_THRESHOLD)
 
 
 def test_trilinear_sampling_is_exact_on_a_linear_table():
