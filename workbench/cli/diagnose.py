@@ -136,6 +136,8 @@ def _print_apl(result) -> None:
 
 def _print_load_only(diagnosis) -> None:
     """A session with windows or surrounds but no display model: apl-dependence alone."""
+    from workbench.diagnostics.selection import APL_TERM
+
     result = diagnosis.to_json()
     print(f"session {result['session']['source']}: {result['session']['measurements']} "
           "measurements; no display model can be fitted (no full-field sweep of each channel): "
@@ -155,18 +157,12 @@ def _print_load_only(diagnosis) -> None:
         print("findings  none beyond noise")
     for i, found in enumerate(result["findings"], start=1):
         print(_finding_line(i, found))
-        print(f"          → {diagnosis_term()}")
+        print(f"          → {APL_TERM}")
     for check in result["checked"]:
         if check["testable"]:
             print(f"checked   {check['effect']} (z {check['z']:.1f}): {check['evidence']}")
     _print_apl(result)
     print("(CIEDE2000 in CIELAB whose white is the brightest patch's zero-load output)")
-
-
-def diagnosis_term() -> str:
-    from workbench.diagnostics.selection import APL_TERM
-
-    return APL_TERM
 
 
 def _critical(result) -> float:
