@@ -234,6 +234,23 @@ def test_a_file_that_cannot_be_read_is_reported_naming_it(qtbot, window, tmp_pat
     assert "bad.csv" in error.args[0]
 
 
+def test_a_view_failing_on_an_opened_file_is_reported_not_raised(qtbot, window, tmp_path, monkeypatch):
+    from workbench.gui import main_window
+    from workbench.workspace import LoadedPath
+
+    path = tmp_path / "session.csv"
+    monkeypatch.setattr(main_window, "load_path", lambda p: LoadedPath(Path(p), None, None))
+
+    def broken_view(workspace):
+        raise RuntimeError("the view broke")
+
+    window.workspace.subscribe("session-changed", broken_view)
+    with qtbot.waitSignal(window.error, timeout=RUN_TIMEOUT_MS) as error:
+        window.open_path(path)
+    assert "session.csv" in error.args[0] and "RuntimeError: the view broke" in error.args[0]
+    assert window.settings.recent_files() == []
+
+
 def test_the_flow_has_every_page_in_order_and_a_missing_one_says_why(window):
     assert [window.stack.widget(i).title for i in range(window.stack.count())] == [p[3] for p in PAGES]
     page = _make_page("workbench.gui.pages.no_such_page", "NoPage", "Nowhere", window.workspace)

@@ -33,7 +33,7 @@ from PySide6.QtWidgets import (
 
 from workbench.gui.log_dock import LogDock
 from workbench.gui.settings import WindowSettings
-from workbench.gui.workers import CallWorker
+from workbench.gui.workers import CallWorker, describe_error
 from workbench.workspace import load_path, unfinished_journal
 
 __all__ = ["PAGES", "MainWindow", "UnavailablePage", "OPEN_FILTER", "SHORTCUTS"]
@@ -319,7 +319,11 @@ class MainWindow(QMainWindow):
         loader.start()
 
     def _loaded(self, loaded) -> None:
-        self.workspace.apply(loaded)
+        try:
+            self.workspace.apply(loaded)
+        except Exception as error:  # noqa: BLE001 - a view failing must reach the user, not stderr
+            self.report_error(f"could not show {loaded.path}: {describe_error(error)}")
+            return
         self.settings.add_recent(loaded.path)
         self._fill_recent()
         self.statusBar().showMessage(f"opened {loaded.path}", 5000)
