@@ -16,10 +16,11 @@ import colour
 import numpy as np
 from scipy.optimize import least_squares
 
-from workbench.colorimetry import WORKING_SHAPE, WORKING_WAVELENGTHS, observer_cmfs
+from workbench.colorimetry import WORKING_WAVELENGTHS
 from workbench.errors import WorkbenchError
 from workbench.illuminants.source import Illuminant
-from workbench.illuminants.synthesized import TWO_PEAK_BLUE_NM, TWO_PEAK_FWHM_NM
+# the LED shape and the chromaticity the d65-two-peak design solves with
+from workbench.illuminants.synthesized import TWO_PEAK_BLUE_NM, TWO_PEAK_FWHM_NM, _led, _xy
 
 __all__ = ["METAMER_XY_TOLERANCE", "two_peak_metamer"]
 
@@ -27,15 +28,6 @@ METAMER_XY_TOLERANCE = 1e-6
 """Largest |Δx|, |Δy| between a metamer and its source."""
 
 _BLUE_CANDIDATES_NM = (TWO_PEAK_BLUE_NM, 440.0, 460.0, 430.0, 470.0, 480.0)
-
-
-def _led(peak_nm: float, fwhm_nm: float) -> np.ndarray:
-    return colour.sd_single_led(peak_nm, half_spectral_width=fwhm_nm, shape=WORKING_SHAPE).values
-
-
-def _xy(power: np.ndarray) -> np.ndarray:
-    XYZ = power @ observer_cmfs("cie1931-2").values
-    return XYZ[:2] / XYZ.sum()
 
 
 def two_peak_metamer(illuminant: Illuminant, fwhm_nm: float = TWO_PEAK_FWHM_NM) -> Illuminant:
