@@ -228,3 +228,16 @@ def test_a_fresh_simulated_calibration_bundles_and_conforms(tmp_path):
                                              profile.display_model(), k=profile.k).texels
         assert np.mean(np.all(texels == reference, axis=-1)) >= 0.99
     assert summary.cube_accuracy.mean_dE00 <= 0.5
+
+
+@pytest.mark.parametrize("text, message", [
+    ("LUT_3D_SIZE x\n", "line 1: 'LUT_3D_SIZE x' is not a size"),
+    ("LUT_3D_SIZE 2\n" + "0 0 0\n" * 7 + "0 0 -\n", "line 9: .* is not a size or a row"),
+    ("LUT_3D_SIZE 2\n" + "0 0\n" * 8, "N³ rows"),
+    ("DOMAIN_MIN 0 0 0\n", "unsupported keyword 'DOMAIN_MIN'"),
+])
+def test_a_malformed_cube_file_is_an_input_error_naming_the_line(tmp_path, text, message):
+    path = tmp_path / "bad.cube"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message):
+        read_cube_file(path)

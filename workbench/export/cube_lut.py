@@ -94,13 +94,17 @@ def read_cube_file(path) -> np.ndarray:
         text = line.strip()
         if not text or text.startswith("#") or text.startswith("TITLE"):
             continue
-        if text.startswith("LUT_3D_SIZE"):
-            size = int(text.split()[1])
-            continue
-        if text[0].isalpha():
+        if text[0].isalpha() and not text.startswith("LUT_3D_SIZE"):
             raise InputError(f"{path}, line {number}: unsupported keyword {text.split()[0]!r}")
-        values.append([float(v) for v in text.split()])
-    if size is None or len(values) != size ** 3:
+        try:
+            if text.startswith("LUT_3D_SIZE"):
+                size = int(text.split()[1])
+            else:
+                values.append([float(v) for v in text.split()])
+        except (ValueError, IndexError):
+            raise InputError(f"{path}, line {number}: {text[:40]!r} is not a size or a row of "
+                             "numbers") from None
+    if size is None or size < 2 or len(values) != size ** 3 or any(len(v) != 3 for v in values):
         raise InputError(f"{path}: expected LUT_3D_SIZE and N³ rows; got size {size} and "
                          f"{len(values)} rows")
     return np.asarray(values, dtype=np.float64).reshape(size, size, size, 3)
