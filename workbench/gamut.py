@@ -54,10 +54,6 @@ def _xy(XYZ):
     return colour.XYZ_to_xy(np.asarray(XYZ, dtype=float))
 
 
-def _uv(XYZ):
-    return colour.Luv_to_uv(colour.XYZ_to_Luv(np.asarray(XYZ, dtype=float)))
-
-
 def _xy_to_XYZ(xy):
     return colour.xy_to_XYZ(np.asarray(xy, dtype=float))
 
@@ -217,7 +213,7 @@ def validation_points(diagnosis=None, session=None, display: DisplayModel | None
 
     With a diagnosis: its session's validation rows, predicted by the
     extended model the diagnosis chose. Else ``session``'s validation rows
-    (all rows if it has none marked) predicted by ``display`` (the profile).
+    predicted by ``display`` (the profile). None when there are no validation rows.
     """
     if diagnosis is not None:
         session, display, model = diagnosis.session, diagnosis.extended, "extended model"
