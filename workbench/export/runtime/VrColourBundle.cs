@@ -48,6 +48,7 @@ namespace VrColourWorkbench
         public Vector4 CorrectionDomain { get; private set; }
         public int CorrectionSize { get; private set; }
         readonly Dictionary<string, Texture2DArray> coefficients = new Dictionary<string, Texture2DArray>();
+        readonly Dictionary<string, Texture2D> texelTables = new Dictionary<string, Texture2D>();
 
         VrColourBundle() { }
 
@@ -173,12 +174,18 @@ namespace VrColourWorkbench
                     }
                     rows[3 * layer + output] = row;
                 }
-            var texels = new float[768];
-            for (int i = 0; i < 768; ++i) texels[i] = light.texel_table[i];
+            Texture2D texelTable;   // one texture per cube and light, not one per call
+            if (!texelTables.TryGetValue(cube + "\n" + lightId, out texelTable))
+            {
+                var texels = new float[768];
+                for (int i = 0; i < 768; ++i) texels[i] = light.texel_table[i];
+                texelTable = FloatTable(texels, 256);
+                texelTables[cube + "\n" + lightId] = texelTable;
+            }
             material.SetTexture("_VrCoefficients", LoadCoefficients(cube));
             material.SetTexture("_VrThresholds", Thresholds);
             material.SetTexture("_VrCells", Cells);
-            material.SetTexture("_VrTexelTable", FloatTable(texels, 256));
+            material.SetTexture("_VrTexelTable", texelTable);
             if (DriveCorrection != null) material.SetTexture("_VrDriveCorrection", DriveCorrection);
             material.SetVectorArray("_VrMatrixRows", rows);
             material.SetVector("_VrDriveOffset", new Vector4(light.offset[0], light.offset[1], light.offset[2], 0f));
