@@ -200,9 +200,7 @@ class DiagnosisContext:
     @property
     def apl_testable(self) -> bool:
         """Whether some patch was measured under two frames (the APL test counts then)."""
-        from workbench.apl import load_rows
-
-        return self.load_session is not None and len(load_rows(self.load_session)) > 0
+        return _apl_testable(self.load_session)
 
 
 def _untestable(effect: str, why: str) -> DetectorResult:
@@ -240,8 +238,7 @@ def build_context(fit_session: Session, drift_found: bool | None = None,
         load_session = None
     if drift_found is None:
         test = detect_temporal_drift_raw(drift, time_basis, noise)
-        apl = load_session is not None and _load_rows_count(load_session) > 0
-        drift_found = test.testable and test.p_value <= critical_p(family_size(apl))
+        drift_found = test.testable and test.p_value <= critical_p(family_size(_apl_testable(load_session)))
     if drift is not None and drift_found:
         # the correction follows the references only as far as they rise above their noise
         drift = drift.smoothed_to_noise(noise.sd_Y(drift.luminances) / drift.luminances)
@@ -264,10 +261,11 @@ def build_context(fit_session: Session, drift_found: bool | None = None,
                             white_count=int(whites.sum()), load_session=load_session)
 
 
-def _load_rows_count(session: Session) -> int:
+def _apl_testable(load_session: Session | None) -> bool:
+    """Whether some patch of ``load_session`` was measured under two frames."""
     from workbench.apl import load_rows
 
-    return len(load_rows(session))
+    return load_session is not None and len(load_rows(load_session)) > 0
 
 
 def _with_labels_of(labelled: Session, corrected: Session) -> Session:
