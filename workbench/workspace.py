@@ -145,11 +145,10 @@ def load_path(path: str | Path) -> LoadedPath:
     if not path.exists():
         raise WorkbenchError(f"{path}: no such file or directory; choose a session CSV, .ti3, .mat, "
                              "a measurement directory or a .vrprofile.json")
-    if is_profile_file(path):
-        session = read_session(path)
-        return LoadedPath(path, session, diagnose(session), load_profile(path), path)
     session = read_session(path)
     diagnosis = diagnose(session)
+    if is_profile_file(path):
+        return LoadedPath(path, session, diagnosis, load_profile(path), path)
     # the headset just measured becomes the current profile (unsaved until exported), so
     # the gamut, the light colours and the scene show this display, not the previous one
     return LoadedPath(path, session, diagnosis, profile_from_diagnosis(diagnosis), None)
