@@ -37,6 +37,8 @@ __all__ = [
     "estimate_transfer",
     "load_rows",
     "fit_apl_curve",
+    "patch_keys",
+    "patch_means",
     "unlimited_XYZ",
 ]
 
@@ -152,7 +154,7 @@ def load_rows(session: Session, min_relative_luminance: float = MIN_RELATIVE_LUM
     surround = session.surround_or_black
     Y = session.XYZ[:, 1]
     bright = Y >= min_relative_luminance * max(float(Y.max()), 1e-300)
-    key_patch = np.round(session.rgb, _PATCH_DECIMALS)
+    key_patch = patch_keys(session.rgb)
     frame = np.column_stack([np.round(window, 6), np.round(surround, _PATCH_DECIMALS)])
     _, patch_id = np.unique(key_patch, axis=0, return_inverse=True)
     patch_id = patch_id.reshape(-1)
@@ -313,9 +315,18 @@ def unlimited_XYZ(session: Session, curve: AplCurve, rows=None) -> tuple[np.ndar
     mask = np.ones(len(session), dtype=bool) if rows is None else np.asarray(rows, dtype=bool)
     rgb = session.rgb[mask]
     gain = curve.gain(curve.load(rgb, session.window_or_full[mask], session.surround_or_black[mask]))
-    patches, inverse = np.unique(np.round(rgb, _PATCH_DECIMALS), axis=0, return_inverse=True)
+    return patch_means(rgb, session.XYZ[mask] / gain[:, None])
+
+
+def patch_keys(rgb) -> np.ndarray:
+    """DAC values rounded so that rows of the same patch compare equal."""
+    return np.round(rgb, _PATCH_DECIMALS)
+
+
+def patch_means(rgb, XYZ) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct patches (:func:`patch_keys`, in ``np.unique`` order) and each one's mean ``XYZ``."""
+    patches, inverse = np.unique(patch_keys(rgb), axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
-    XYZ = session.XYZ[mask] / gain[:, None]
     totals = np.zeros((len(patches), 3))
     np.add.at(totals, inverse, XYZ)
     return patches, totals / np.bincount(inverse)[:, None]

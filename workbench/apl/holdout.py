@@ -18,15 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from workbench.apl.curve import ChannelTransfer, estimate_transfer, fit_apl_curve, load_rows, unlimited_XYZ
+from workbench.apl.curve import (ChannelTransfer, estimate_transfer, fit_apl_curve, load_rows, patch_keys,
+                                 patch_means, unlimited_XYZ)
 from workbench.colorimetry import delta_E2000
 from workbench.errors import InputError
 from workbench.session import Session
 
 __all__ = ["AplHoldoutFold", "AplHoldout", "apl_fold_labels", "evaluate_apl_holdout"]
-
-_PATCH_DECIMALS = 2
-
 
 @dataclass(frozen=True)
 class AplHoldoutFold:
@@ -137,7 +135,7 @@ def evaluate_apl_holdout(session: Session, labels, by: str, *,
     labels = np.asarray(labels, dtype=object)
     transfer = transfer or estimate_transfer(session)
     candidates = load_rows(session).index
-    keys = np.round(session.rgb, _PATCH_DECIMALS)
+    keys = patch_keys(session.rgb)
     folds, lum_all, dE_all, lum0_all, dE0_all = [], [], [], [], []
     for label in sorted(set(labels[candidates])):
         held = labels == label
@@ -156,7 +154,7 @@ def evaluate_apl_holdout(session: Session, labels, by: str, *,
         gain = curve.gain(curve.load(session.rgb[test], session.window_or_full[test],
                                      session.surround_or_black[test]))
         predicted = zero_load[which] * gain[:, None]
-        without = _training_means(session, train, keys)[which]
+        without = patch_means(session.rgb[train], session.XYZ[train])[1][which]
         white = zero_load[np.argmax(zero_load[:, 1])]
         measured = session.XYZ[test]
         lum = 100.0 * np.abs(predicted[:, 1] - measured[:, 1]) / measured[:, 1]
@@ -174,11 +172,3 @@ def evaluate_apl_holdout(session: Session, labels, by: str, *,
                       float(np.percentile(lum, 95)), float(np.percentile(dE, 95)),
                       float(np.concatenate(lum0_all).mean()), float(np.concatenate(dE0_all).mean()))
 
-
-def _training_means(session: Session, train: np.ndarray, keys: np.ndarray) -> np.ndarray:
-    """Mean XYZ of each distinct patch over the training rows, in the order of ``np.unique``."""
-    patches, inverse = np.unique(keys[train], axis=0, return_inverse=True)
-    inverse = inverse.reshape(-1)
-    totals = np.zeros((len(patches), 3))
-    np.add.at(totals, inverse, session.XYZ[train])
-    return totals / np.bincount(inverse)[:, None]
