@@ -55,7 +55,7 @@ from workbench.export.runtime_inverse import (
     runtime_display_inverse,
     runtime_inverse_accuracy,
 )
-from workbench.fileio import atomic_writer
+from workbench.fileio import _umask, atomic_writer
 from workbench.profile import PROFILE_FORMAT_VERSION, RUNTIME_COLOUR_SPACE, Profile, save_profile
 
 __all__ = [
@@ -127,9 +127,7 @@ def _staged_directory(target: Path):
     except OSError as error:
         raise InputError(f"--bundle {target}: cannot create a folder in {target.parent} "
                          f"({error.strerror or error}); give a writable folder") from None
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(staging, 0o777 & ~mask)  # a folder as mkdir makes it, not mkdtemp's 0700
+    os.chmod(staging, 0o777 & ~_umask())  # a folder as mkdir makes it, not mkdtemp's 0700
     try:
         yield staging
         old = None
