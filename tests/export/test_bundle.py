@@ -241,3 +241,31 @@ def test_a_malformed_cube_file_is_an_input_error_naming_the_line(tmp_path, text,
     path.write_text(text)
     with pytest.raises(InputError, match=message):
         read_cube_file(path)
+
+
+def test_a_failed_export_leaves_the_earlier_bundle_whole(tmp_path, vive_profile, monkeypatch):
+    import workbench.export.bundle as bundle_module
+
+    out = tmp_path / "bundle"
+    write_bundle(vive_profile, out, light_ids=["cie-d65"], lut_size=5)
+    before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+
+    def fail(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(bundle_module, "lights_table", fail)           # inside the staging block
+    with pytest.raises(OSError, match="disk full"):
+        write_bundle(vive_profile, out, light_ids=["cie-a"], lut_size=5)
+    monkeypatch.undo()
+    real_replace = bundle_module.os.replace
+
+    def replace(source, target):                                       # the swap itself fails
+        if str(source).endswith(".partial"):
+            raise OSError("disk full")
+        real_replace(source, target)
+
+    monkeypatch.setattr(bundle_module.os, "replace", replace)
+    with pytest.raises(OSError, match="disk full"):
+        write_bundle(vive_profile, out, light_ids=["cie-a"], lut_size=5)
+    assert {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert [p.name for p in tmp_path.iterdir()] == ["bundle"]          # nothing left beside it
