@@ -87,6 +87,19 @@ def test_the_curve_is_one_without_load_and_scales_full_field_predictions():
         apl_curve_from_json({"sharpness": 1})
 
 
+@pytest.mark.parametrize("key, value, message", [("method", "srgb", "unknown channel transfer 'srgb'"),
+                                                 ("gammas", [2.2, 2.2], "2 transfer gammas")])
+def test_an_apl_block_with_a_transfer_that_cannot_be_evaluated_is_refused_by_name(key, value, message):
+    from workbench.profile import ProfileError, check_apl_block
+
+    block = AplCurve(0.2, 4.0, 0.5).to_json()
+    block["transfer"][key] = value
+    with pytest.raises(InputError, match=message):
+        apl_curve_from_json(block)
+    with pytest.raises(ProfileError, match=message):  # not a KeyError or a broadcasting ValueError
+        check_apl_block(block)
+
+
 def test_predict_reads_the_optional_columns_by_name_or_position():
     rows = read_predict_rows("R,G,B,Window,SR,SG,SB\n255,255,255,0.1,0,0,0\n10,20,30,1,5,5,5\n")
     assert np.allclose(rows.window, [0.1, 1.0]) and np.allclose(rows.surround[1], 5)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from workbench.apl.curve import AplCurve
-from workbench.apl.load import ChannelTransfer
+from workbench.apl.load import channel_transfer
 from workbench.errors import InputError
 
 __all__ = ["PredictRows", "read_predict_rows", "predict_XYZ_on_surround", "apl_curve_from_json"]
@@ -133,10 +133,15 @@ def apl_curve_from_json(data: dict) -> AplCurve:
     """The :class:`AplCurve` of :meth:`AplCurve.to_json` (a profile's or a bundle's APL block)."""
     try:
         transfer = data["transfer"]
-        return AplCurve(float(data["knee"]), float(data["sharpness"]), float(data["exponent"]),
-                        ChannelTransfer(transfer["method"], tuple(float(g) for g in transfer["gammas"]),
-                                        float(transfer["peak_cd_m2"])),
-                        tuple(float(s) for s in data["power_shares"]), str(data.get("fitted_on", "")))
+        method, gammas = str(transfer["method"]), tuple(float(g) for g in transfer["gammas"])
+        peak = float(transfer["peak_cd_m2"])
+        curve = (float(data["knee"]), float(data["sharpness"]), float(data["exponent"]))
+        shares = tuple(float(s) for s in data["power_shares"])
     except (KeyError, TypeError, ValueError) as error:
         raise InputError(f"APL curve block is incomplete ({error}); it needs knee, sharpness, exponent, "
                          "power_shares and transfer {method, gammas, peak_cd_m2}") from None
+    if len(gammas) != 3 or len(shares) != 3:
+        raise InputError(f"APL curve block gives {len(gammas)} transfer gammas and {len(shares)} power "
+                         "shares; give one of each per channel (3)")
+    return AplCurve(*curve, channel_transfer(method, gammas=gammas, peak_cd_m2=peak), shares,
+                    str(data.get("fitted_on", "")))
