@@ -184,6 +184,8 @@ def test_export_errors_name_the_input(tmp_path, vive_profile):
         write_bundle(vive_profile, tmp_path / "b", light_ids=["cie-d65"], lut_size=1)
     with pytest.raises(WorkbenchError, match="no-such-light"):
         write_bundle(vive_profile, tmp_path / "b", light_ids=["no-such-light"])
+    with pytest.raises(InputError, match="light cie-a named more than once"):
+        write_bundle(vive_profile, tmp_path / "b", light_ids=["cie-a", "cie-d65", "cie-a"])
     assert not (tmp_path / "b").exists()
     (tmp_path / "a-file").write_text("mine")
     with pytest.raises(InputError, match="cannot create a folder"):

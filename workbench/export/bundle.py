@@ -226,6 +226,10 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
         raise InputError("the profile has no lights; name some with --lights ID,...")
     illuminants = [get_illuminant(light_id) for light_id in light_ids]
     light_ids = tuple(illuminant.id for illuminant in illuminants)
+    twice = sorted({light_id for light_id in light_ids if light_ids.count(light_id) > 1})
+    if twice:
+        raise InputError(f"light {', '.join(twice)} named more than once (--lights, or the "
+                         "profile's lights); a bundle holds each light once")
     display = profile.display_model()
     loaded, taken = [], set()
     for item in cubes:
