@@ -130,3 +130,12 @@ def test_diagnose_json_on_a_session_without_a_display_model(capsys):
     assert [f["effect"] for f in document["findings"]] == ["apl-dependence"]
     assert {h["by"] for h in document["apl"]["holdout"]} == {"stabilizer level", "bias size"}
     assert len(document["untested"]) == 5
+
+
+def test_a_truncated_samsung_file_is_refused_by_name_not_with_a_traceback(tmp_path):
+    from workbench.errors import SpectrumFileError
+
+    truncated = tmp_path / "SamsungOLED_truncated.mat"
+    truncated.write_bytes((REAL / "SamsungOLED_calib_2014-09-29.mat").read_bytes()[:60000])
+    with pytest.raises(SpectrumFileError, match="truncated or damaged"):
+        read_session(truncated)

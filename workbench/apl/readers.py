@@ -100,7 +100,11 @@ def read_samsung_apl_mat(path) -> Session:
     path = Path(path)
     if not path.is_file():
         raise SpectrumFileError(path, None, "no such file", "check the path")
-    contents = scipy.io.loadmat(str(path), squeeze_me=True, struct_as_record=False)
+    try:
+        contents = scipy.io.loadmat(str(path), squeeze_me=True, struct_as_record=False)
+    except (ValueError, NotImplementedError, OSError) as error:  # as read_psychtoolbox_mat
+        raise SpectrumFileError(path, None, f"not a readable MATLAB v5 file ({error})",
+                                "the file is truncated or damaged: copy it again from its source") from None
     try:
         params = contents["runParams"]
         conditions = np.atleast_1d(contents["allCondsData"])
