@@ -106,6 +106,15 @@ def test_damaged_bundles_give_one_clear_error(damaged, tmp_path, capsys, name):
     assert not out.exists()
 
 
+def test_an_unwritable_out_is_one_error(damaged, tmp_path, capsys):
+    module = consumer_module(damaged)
+    out = tmp_path / "no-such-folder" / "t.png"
+    assert module.main([str(damaged), "texture", "paint", "--light", "cie-a",
+                        "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1 and "no-such-folder" in err
+
+
 def test_the_undamaged_copy_works(damaged, tmp_path, capsys):
     module = consumer_module(damaged)
     assert module.main([str(damaged), "texture", "paint", "--light", "cie-a",

@@ -294,7 +294,7 @@ def main(argv=None):
             table = read_cube(bundle.folder / "display_inverse.cube")
             dac = trilinear(table, np.asarray(args.rgb, dtype=np.float32)) * 255.0
             print(json.dumps({"dac": [round(float(v), 4) for v in dac]}))
-    except BundleError as error:
+    except (BundleError, OSError) as error:   # OSError: an unreadable file, an unwritable --out
         print(f"error: {error}", file=sys.stderr)
         return 2
     return 0
