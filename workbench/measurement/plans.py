@@ -351,6 +351,10 @@ def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
         if missing:
             raise SpectrumFileError(path, 1, f"the header lacks column(s) {missing}",
                                     "the first row must name the columns kind,r,g,b (any order, any case)")
+        surround_columns = [c for c in ("sr", "sg", "sb") if c in columns]
+        if surround_columns and len(surround_columns) != 3:
+            raise SpectrumFileError(path, 1, f"the header has {surround_columns} but not all of sr,sg,sb",
+                                    "give the surround as three columns sr,sg,sb or none")
         for line, row in enumerate(reader, start=2):
             if not row or all(not cell.strip() for cell in row):
                 continue
@@ -361,7 +365,6 @@ def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
             if kind not in SESSION_KINDS:
                 raise SpectrumFileError(path, line, f"unknown kind {kind!r}", f"use one of {', '.join(SESSION_KINDS)}")
             rgb = []
-            surround_columns = [c for c in ("sr", "sg", "sb") if c in columns]
             for channel in ("r", "g", "b", *surround_columns):
                 text = row[columns[channel]].strip()
                 try:
@@ -372,9 +375,6 @@ def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
                     raise SpectrumFileError(path, line, f"column {channel!r} holds {text!r}",
                                             "write an integer DAC value 0..255")
                 rgb.append(value)
-            if surround_columns and len(surround_columns) != 3:
-                raise SpectrumFileError(path, 1, f"the header has {surround_columns} but not all of sr,sg,sb",
-                                        "give the surround as three columns sr,sg,sb or none")
             window = 1.0
             if "window" in columns:
                 text = row[columns["window"]].strip()
