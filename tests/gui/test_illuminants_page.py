@@ -114,6 +114,22 @@ def test_profile_change_recomputes_the_headset_light_colour(page, qtbot):
     assert after.rgb8_profile == after.rgb8_srgb != before
 
 
+def test_a_second_profile_change_while_the_rows_compute_waits_for_its_own_rows(page, qtbot):
+    from workbench.display import SRGBDisplay
+    from workbench.profile import Profile, paper_vive_profile
+
+    total = len(list_illuminants())
+    ready = []  # the progress count at each rows_ready
+    page.rows_ready.connect(lambda: ready.append(page.progress.value()))
+    page.workspace.set_profile(paper_vive_profile())
+    page.workspace.set_profile(Profile.from_display_model(SRGBDisplay(), device={"name": "sRGB"}))
+    qtbot.waitUntil(lambda: total in ready, timeout=60000)
+    qtbot.wait(200)
+    assert ready == [total]  # once, when the latest change's rows are all in (not at the superseded job's end)
+    assert all(page.model.row_of(i).rgb8_profile == page.model.row_of(i).rgb8_srgb
+               for i in page.model.ids())
+
+
 def test_a_broken_user_library_file_is_named_and_the_rest_listed(qtbot, tmp_path, monkeypatch):
     from workbench.illuminants import get_illuminant
 

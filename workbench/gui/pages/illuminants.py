@@ -259,6 +259,9 @@ class IlluminantsPage(QWidget):
         self.progress.setValue(0)
         self._skipped = []
         self.progress.show()
+        # A superseded job (quit above) may still deliver a row, and it ends after this one
+        # starts: only the latest job's rows and end count.
+        self._rows_run = run = getattr(self, "_rows_run", 0) + 1
 
         def rows():
             for i, source_id in enumerate(ids):
@@ -266,14 +269,16 @@ class IlluminantsPage(QWidget):
                     row = source_row(resolve_illuminant(source_id, library), display, k=k)
                 except WorkbenchError as error:  # e.g. a user-library file edited by hand
                     row = f"{source_id}: {describe_error(error)}"
-                yield i + 1, row
+                yield run, i + 1, row
 
         worker = self._run(rows, yielded=self._on_row, generator=True)
         self._workers[-1].tag = "rows"
-        worker.finished.connect(self._on_rows_finished)
+        worker.finished.connect(lambda: self._on_rows_finished() if run == self._rows_run else None)
 
     def _on_row(self, item) -> None:
-        count, row = item
+        run, count, row = item
+        if run != self._rows_run:
+            return
         self.progress.setValue(count)
         if isinstance(row, str):
             self._skipped.append(row)
