@@ -109,10 +109,19 @@ namespace VrColourWorkbench
                 string text = line.Trim();
                 if (text.Length == 0 || text.StartsWith("#") || text.StartsWith("TITLE")) continue;
                 string[] parts = text.Split(new[] { ' ', '\t' }, StringSplitOptions.RemoveEmptyEntries);
-                if (parts[0] == "LUT_3D_SIZE") { size = int.Parse(parts[1], CultureInfo.InvariantCulture); continue; }
-                colours.Add(new Color(float.Parse(parts[0], CultureInfo.InvariantCulture),
-                                      float.Parse(parts[1], CultureInfo.InvariantCulture),
-                                      float.Parse(parts[2], CultureInfo.InvariantCulture), 1f));
+                try
+                {
+                    if (parts[0] == "LUT_3D_SIZE") { size = int.Parse(parts[1], CultureInfo.InvariantCulture); continue; }
+                    if (parts.Length != 3) throw new FormatException();
+                    colours.Add(new Color(float.Parse(parts[0], CultureInfo.InvariantCulture),
+                                          float.Parse(parts[1], CultureInfo.InvariantCulture),
+                                          float.Parse(parts[2], CultureInfo.InvariantCulture), 1f));
+                }
+                catch (Exception error) when (error is FormatException || error is OverflowException
+                                              || error is IndexOutOfRangeException)
+                {
+                    throw new BundleException(path + ": '" + text + "' is not a size or a row of r g b");
+                }
             }
             if (size < 2 || colours.Count != size * size * size)
                 throw new BundleException(path + ": not a complete .cube");
