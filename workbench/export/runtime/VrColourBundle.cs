@@ -73,6 +73,8 @@ namespace VrColourWorkbench
             if (bundle.CorrectionSize > 0)
             {
                 int n = bundle.CorrectionSize;
+                if (n < 2 || n > 257 || inverse.correction.domain == null || inverse.correction.domain.Length != 2)
+                    throw new BundleException(directory + ": display_inverse.json correction needs a size of 2..257 and a domain of 2 numbers");
                 byte[] raw = ReadBytes(directory, inverse.correction.file, n * n * n * 3 * 4);
                 var colours = new Color[n * n * n];
                 for (int i = 0; i < colours.Length; ++i)
@@ -245,7 +247,9 @@ namespace VrColourWorkbench
         {
             string path = Path.Combine(directory, name);
             if (!File.Exists(path)) throw new BundleException(path + ": missing from the bundle");
-            T value = JsonUtility.FromJson<T>(File.ReadAllText(path));
+            T value;
+            try { value = JsonUtility.FromJson<T>(File.ReadAllText(path)); }
+            catch (ArgumentException) { throw new BundleException(path + ": not valid JSON"); }  // what JsonUtility throws
             if (value == null) throw new BundleException(path + ": not valid JSON");
             return value;
         }
