@@ -51,6 +51,7 @@ from workbench.export.level2_files import (
 )
 from workbench.export.lights_table import lights_table
 from workbench.export.runtime_inverse import (
+    CELLS,
     InverseAccuracy,
     runtime_display_inverse,
     runtime_inverse_accuracy,
@@ -168,7 +169,7 @@ def _readme(profile: Profile, manifest: dict, accuracy: CubeAccuracy) -> str:
                     else "This model's drive is affine in XYZ: no correction table"),
         inverse_identical=f"{100 * manifest['runtime_inverse']['identical_share']:.2f}",
         inverse_max=manifest["runtime_inverse"]["max_counts"],
-        apl=_apl_text(manifest["apl"]),
+        apl=_apl_text(manifest["apl"]), cells=CELLS, cells_last=CELLS - 1,
         version=BUNDLE_FORMAT_VERSION)
 
 
