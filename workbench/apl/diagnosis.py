@@ -44,9 +44,11 @@ class AplDiagnosis:
         """The lines a report ends with: the evidence and the held-out error of the curve."""
         if not self.test.testable:
             return f"apl-dependence {self.test.evidence}"
-        lines = [f"apl-dependence: {self.test.evidence}"]
-        lines += [f"APL curve, {holdout.one_line()}" for holdout in self.holdouts]
-        return "\n".join(lines)
+        return "\n".join([f"apl-dependence: {self.test.evidence}", *self.holdout_lines()])
+
+    def holdout_lines(self) -> list[str]:
+        """``APL curve, leave one … out: …`` for each held-out grouping (none: an empty list)."""
+        return [f"APL curve, {holdout.one_line()}" for holdout in self.holdouts]
 
     def to_json(self) -> dict:
         """Plain JSON types, for ``diagnose --json``."""

@@ -125,8 +125,7 @@ def diagnose_load_only(session: Session, why: str = "") -> LoadOnlyDiagnosis:
         result = replace(result, critical_z=z_of_p(level), significant=significant, found=found)
         if found:
             apl = diagnose_apl(rows, noise.relative_sd_Y(rows.XYZ[:, 1]))
-            note = ("; ".join(f"APL curve, {h.one_line()}" for h in apl.holdouts)
-                    or "no window size or surround level could be held out")
+            note = "; ".join(apl.holdout_lines()) or "no window size or surround level could be held out"
             result = replace(result, in_model=True, cross_validation=note)
     reason = "no display model to test it against (the full-field rows hold no sweep of each "\
              "channel)"

@@ -228,9 +228,9 @@ def _apl_part(context: DiagnosisContext, results) -> tuple[tuple, AplDiagnosis |
         return tuple(replace(r, found=False) if r.effect == APL_EFFECT else r
                      for r in results), None
     part = diagnose_apl(context.load_session, load_relative_noise(context))
-    note = ("in the model: " + "; ".join(f"APL curve, {h.one_line()}" for h in part.holdouts)
-            if part.holdouts else "in the model: no window size or surround level could be "
-                                  "held out to score the APL curve")
+    held_out = ("; ".join(part.holdout_lines())
+                or "no window size or surround level could be held out to score the APL curve")
+    note = f"in the model: {held_out}"
     return tuple(replace(r, found=True, in_model=True, cross_validation=note)
                  if r.effect == APL_EFFECT else r for r in results), part
 
