@@ -37,7 +37,7 @@ from workbench.display import (
     GammaMatrixDisplay,
     display_model_from_parameters,
 )
-from workbench.errors import WorkbenchError
+from workbench.errors import InputError, WorkbenchError
 from workbench.fileio import atomic_writer
 
 __all__ = [
@@ -190,7 +190,6 @@ def check_display_parameters(model_type: str, parameters: dict, source: str = "p
 def check_apl_block(block: dict, source: str = "profile") -> None:
     """Refuse an ``apl`` block whose curve cannot be evaluated (e.g. power shares not summing to 1)."""
     from workbench.apl.predict import apl_curve_from_json
-    from workbench.errors import InputError
 
     try:
         curve = apl_curve_from_json(block)
