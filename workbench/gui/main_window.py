@@ -246,11 +246,6 @@ class MainWindow(QMainWindow):
             self.pages[key] = page
         return self.pages[key]
 
-    def build_pending_pages(self) -> None:
-        """Build every page still pending (lazy windows build them one per event-loop turn anyway)."""
-        for key in list(self._pending):
-            self.page(key)
-
     def _build_next_page(self) -> None:
         if self._pending and not getattr(self, "_shut_down", False):
             self.page(next(iter(self._pending)))

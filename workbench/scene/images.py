@@ -96,10 +96,6 @@ class SceneContent:
     plate_authored_rgb8: np.ndarray
     wall_reflectance: np.ndarray
 
-    @property
-    def board_shape(self) -> tuple[int, int]:
-        return self.board_labels.shape
-
 
 @dataclass(frozen=True, eq=False)
 class LevelImages:
