@@ -271,3 +271,24 @@ def test_a_failed_export_leaves_the_earlier_bundle_whole(tmp_path, vive_profile,
         write_bundle(vive_profile, out, light_ids=["cie-a"], lut_size=5)
     assert {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     assert [p.name for p in tmp_path.iterdir()] == ["bundle"]          # nothing left beside it
+
+
+def test_export_command_says_when_a_cube_misses_its_target(tmp_path, vive_profile, monkeypatch,
+                                                           capsys):
+    import functools
+
+    import workbench.export
+    from profiles import example_profile_path
+    from workbench.cli import main
+    from workbench.hyperspectral import synthesize_cube, write_cube
+
+    cube = tmp_path / "tiles.npz"
+    write_cube(synthesize_cube(24, 20, cell=6, seed=2), cube)
+    # a share no basis reaches: the choice misses its target and the command says so
+    monkeypatch.setattr(workbench.export, "write_bundle",
+                        functools.partial(workbench.export.write_bundle, target_share=1.01))
+    assert main(["export", str(example_profile_path("htc-vive-paper")), "--bundle",
+                 str(tmp_path / "b"), "--lights", "cie-d65", "--cube", str(cube),
+                 "--lut-size", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "[below target: " in out and "(target 101.0 %)" in out, out

@@ -67,5 +67,9 @@ def _export(args) -> int:
               f"channel(s), {cube['layers']} RGBA16F layer(s); runtime texel identical to the "
               f"full band on {100 * worst:.2f} % of held-out texels (worst light)"
               + ("" if choice["meets_target"] else
-                 f"  [below the {100 * choice['target_identical_share']:.1f} % target]"))
+                 f"  [below target: runtime-inverse texels identical on "
+                 f"{100 * min(choice['basis_identical_share'].values()):.2f} % of held-out texels "
+                 f"(target {100 * choice['target_basis_identical_share']:.1f} %) and "
+                 f"{100 * min(choice['probe_identical_share'].values()):.2f} % of the probe "
+                 f"materials (target {100 * choice['target_probe_identical_share']:.1f} %)]"))
     return 0
