@@ -8,7 +8,7 @@ rows.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -80,11 +80,8 @@ class DriftCorrection:
     def correct(self, session: Session) -> Session:
         """The session with every measurement divided by ``g(t)``."""
         g = self.gain(session.t_s)[:, None]
-        return Session(kind=session.kind, rgb=session.rgb, XYZ=session.XYZ / g, t_s=session.t_s,
-                       wavelengths=session.wavelengths,
-                       spectra=None if session.spectra is None else session.spectra / g,
-                       source=session.source, metadata=dict(session.metadata),
-                       window=session.window, surround=session.surround)
+        return replace(session, XYZ=session.XYZ / g, metadata=dict(session.metadata),
+                       spectra=None if session.spectra is None else session.spectra / g)
 
     @property
     def span(self) -> float:
