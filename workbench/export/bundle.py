@@ -133,7 +133,9 @@ def _staged_directory(target: Path):
         yield staging
         old = None
         if target.exists():
-            old = target.parent / f".{target.name}.old-{os.getpid()}"
+            # beside the staging folder under its unique name: a leftover of a killed export
+            # (whose pid may come back) cannot block this one
+            old = staging.with_name(staging.name.removesuffix(".partial") + ".old")
             os.replace(target, old)
         try:
             os.replace(staging, target)
