@@ -209,6 +209,22 @@ def test_reopening_a_killed_session_offers_to_resume_it(qtbot, window, tmp_path)
     assert len(read_journal(tmp_path / "killed" / JOURNAL_NAME).ok_records()) == QUICK
 
 
+def test_resuming_with_a_form_that_does_not_make_a_setup_says_why(qtbot, window, tmp_path):
+    calibrate = _configure(window, tmp_path / "killed")
+    with open_run(calibrate.form.setup()) as run:
+        for event in run.events():
+            if isinstance(event, PatchMeasured) and event.done == 2:
+                run.cancel()
+    window.ask_resume = lambda journal: True
+    form = calibrate.form
+    form.display.setCurrentIndex(form.display.findData("tcp"))
+    form.tcp.setText("no port here")
+    with qtbot.waitSignal(window.error, timeout=RUN_TIMEOUT_MS) as error:
+        window.open_path(tmp_path / "killed")
+    assert "cannot resume" in error.args[0] and "HOST:PORT" in error.args[0]
+    assert not calibrate.running
+
+
 @pytest.mark.skipif(not REAL.is_dir(), reason=f"the shared real display data is not at {REAL}")
 def test_opening_a_real_ti3_shows_its_diagnosis_and_remembers_it(qtbot, window, tmp_path):
     path = REAL / "dell-up2516d-displaycal.ti3"

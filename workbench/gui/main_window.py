@@ -31,6 +31,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from workbench.errors import WorkbenchError
 from workbench.gui.log_dock import LogDock
 from workbench.gui.settings import WindowSettings
 from workbench.gui.workers import CallWorker, describe_error
@@ -301,9 +302,14 @@ class MainWindow(QMainWindow):
                 calibrate = self.pages["calibrate"]
                 calibrate.form.out_dir.setText(str(path))
                 self.show_page("calibrate")
-                calibrate.start(calibrate.form.setup(
-                    instrument="simulated" if journal.header.settings.get("simulated")
-                    else calibrate.form.instrument.currentData(), effects={}))
+                try:
+                    setup = calibrate.form.setup(
+                        instrument="simulated" if journal.header.settings.get("simulated")
+                        else calibrate.form.instrument.currentData(), effects={})
+                except WorkbenchError as error:  # e.g. a patch server address that is not HOST:PORT
+                    self.report_error(f"cannot resume {path}: {error}")
+                    return
+                calibrate.start(setup)
             return
         self.statusBar().showMessage(f"opening {path}…")
         loader = CallWorker(lambda: load_path(path), self)
