@@ -80,6 +80,7 @@ from workbench.diagnostics.evidence import (
     DriftCorrection,
     channel_sweeps,
     drift_references,
+    partial_greys,
     xy_of,
     MIN_CHROMATICITY_OUTPUT,
 )
@@ -531,8 +532,7 @@ def _grey_points(context: DiagnosisContext):
     primary's luminance.
     """
     rgb = context.fit.rgb
-    greys = ((rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2]) & (rgb[:, 0] > 0)
-             & (rgb[:, 0] < 255) & ~context.copies)
+    greys = partial_greys(rgb) & ~context.copies
     if greys.sum() < MIN_GREY_LEVELS:
         return None
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])

@@ -17,7 +17,12 @@ from workbench.errors import InputError
 from workbench.session import Session
 
 __all__ = ["DriftCorrection", "ChannelSweep", "TIME_BASES", "drift_references", "channel_sweeps",
-           "fit_chromaticity_drift", "xy_of", "MIN_CHROMATICITY_OUTPUT"]
+           "fit_chromaticity_drift", "partial_greys", "xy_of", "MIN_CHROMATICITY_OUTPUT"]
+
+
+def partial_greys(rgb: np.ndarray) -> np.ndarray:
+    """Rows of ``rgb`` (N, 3) that are greys at partial drive: r = g = b, strictly between 0 and 255."""
+    return (rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2]) & (rgb[:, 0] > 0) & (rgb[:, 0] < 255)
 
 
 def xy_of(XYZ: np.ndarray) -> np.ndarray:

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from workbench.diagnostics.detectors import DiagnosisContext, tone_data
-from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift, xy_of
+from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift, partial_greys, xy_of
 from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
 from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_tone_curve
 
@@ -57,15 +57,9 @@ def fitted_on(effect: str, session) -> str:
     }[effect]
 
 
-def _grey_rows(session) -> np.ndarray:
-    rgb = session.rgb
-    return ((rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2]) & (rgb[:, 0] > 0)
-            & (rgb[:, 0] < 255))
-
-
 def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteraction | None = None):
     """Per-channel (drive, output) points implied by the grey rows, or None."""
-    greys = _grey_rows(context.fit) & ~context.copies
+    greys = partial_greys(context.fit.rgb) & ~context.copies
     if greys.sum() < 3:
         return None
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
@@ -131,7 +125,7 @@ def _interaction_term(context: DiagnosisContext, default_exponent: float = DEFAU
     summed = matrix.sum(axis=1)
     amount = float(1.0 - white[1] / summed[1])
     exponent = default_exponent
-    greys = _grey_rows(context.fit) & ~context.copies
+    greys = partial_greys(context.fit.rgb) & ~context.copies
     drive = context.fit.rgb[greys, 0] / 255.0
     keep = drive > 0.1
     if keep.sum() >= 5:

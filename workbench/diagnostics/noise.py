@@ -50,6 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from workbench.diagnostics.evidence import partial_greys
 from workbench.session import Session
 
 __all__ = [
@@ -234,7 +235,7 @@ def _sweeps(session: Session, keep: np.ndarray) -> list[tuple[np.ndarray, ...]]:
     keep = keep & (session.window_or_full >= 1.0)  # a window's output depends on its frame's load
     lit = rgb > 0
     single = [(lit.sum(axis=1) == 1) & lit[:, c] for c in range(3)]
-    grey = (rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2]) & (rgb[:, 0] > 0) & (rgb[:, 0] < 255)
+    grey = partial_greys(rgb)
     out = []
     for rows, channel in [(s, c) for c, s in enumerate(single)] + [(grey, 0)]:
         rows = rows & keep

@@ -23,6 +23,7 @@ import numpy as np
 
 from workbench.colorimetry import delta_E2000
 from workbench.diagnostics.detectors import DetectorResult, DiagnosisContext
+from workbench.diagnostics.evidence import partial_greys
 from workbench.diagnostics.significance import z_of_p
 
 __all__ = ["UNEXPLAINED_RATIO", "UNEXPLAINED_FLOOR_DE00", "NOISE_DRAWS", "noise_share_dE00",
@@ -73,7 +74,7 @@ def _where(validation, errors: np.ndarray) -> str:
 def _recommendation(context: DiagnosisContext) -> str:
     rgb = context.raw.rgb
     lit = (rgb > 0).sum(axis=1)
-    grey = (rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2]) & (rgb[:, 0] > 0) & (rgb[:, 0] < 255)
+    grey = partial_greys(rgb)
     mixtures = (lit >= 2) & ~grey & np.all(rgb < 255, axis=1)
     wanted = []
     if grey.sum() < 5:
