@@ -292,3 +292,16 @@ def test_export_command_says_when_a_cube_misses_its_target(tmp_path, vive_profil
                  "--lut-size", "5"]) == 0
     out = capsys.readouterr().out
     assert "[below target: " in out and "(target 101.0 %)" in out, out
+
+
+def test_coefficients_beyond_float16_are_refused_not_written_as_infinity(tmp_path, paint_cube):
+    from dataclasses import replace
+
+    from workbench.export.level2_files import write_level2_cube
+    from workbench.hyperspectral import fit_cube_basis
+
+    basis = fit_cube_basis(paint_cube, observer="cie1931-2", k=1.0)
+    huge = replace(basis, projection=basis.projection * 1e7)
+    with pytest.raises(InputError, match="exceed the float16 range"):
+        write_level2_cube(tmp_path, "paint", paint_cube, huge, 0, [], None)
+    assert not (tmp_path / "level2" / "paint" / "coefficients.bin").exists()

@@ -362,7 +362,12 @@ def write_level2_cube(directory, name: str, cube: ReflectanceCube, basis: Spectr
     channels = K + split
     layers = -(-channels // 4)
     padded = np.zeros((layers * 4, cube.height, cube.width), dtype="<f2")
-    padded[:channels] = encode_channels(cube, basis, split)
+    with np.errstate(over="ignore"):
+        padded[:channels] = encode_channels(cube, basis, split)
+    if not np.all(np.isfinite(padded)):
+        raise InputError(f"cube {name!r}: its K = {K} basis coefficients exceed the float16 "
+                         "range (a basis with more components than the cube supports); the "
+                         "runtime could not read them")
     rgba = np.ascontiguousarray(padded.reshape(layers, 4, cube.height, cube.width)
                                 .transpose(0, 2, 3, 1))                 # (layers, H, W, 4)
     with atomic_writer(folder / "coefficients.bin", "wb") as handle:
