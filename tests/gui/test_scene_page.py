@@ -100,3 +100,27 @@ def test_save_screenshot_shows_the_3d_views(page, tmp_path):
         assert abs(colour.red() - int(expected[0])) <= 2, (level, index)
         assert abs(colour.green() - int(expected[1])) <= 2
         assert abs(colour.blue() - int(expected[2])) <= 2
+
+
+def test_a_source_that_cannot_be_read_is_named_and_another_one_builds_the_views(qtbot, tmp_path, monkeypatch):
+    from workbench.illuminants import get_illuminant
+    from workbench.illuminants.user_library import USER_LIBRARY_ENV, UserLibrary
+
+    monkeypatch.setenv(USER_LIBRARY_ENV, str(tmp_path / "library"))
+    broken = UserLibrary().add(get_illuminant("cie-fl2"), name="tube")
+    (tmp_path / "library" / f"{broken}.csv").write_text("wavelength,value\n380,oops\n")
+    workspace = Workspace()
+    workspace.set_selected_sources([broken, "cie-d65"])
+    page = ScenePage(workspace)
+    qtbot.addWidget(page)
+    page.resize(1200, 800)
+    page.show()
+    qtbot.waitUntil(lambda: "Cannot show" in page.caption.text())
+    assert broken in page.caption.text() and page.plotter is None
+    with qtbot.waitSignal(page.source_changed):
+        page.select_source(broken)
+    assert page.plotter is None
+    page.select_source("cie-d65")
+    assert page.plotter is not None and page.error_summary().source == "cie-d65"
+    assert "Cannot show" not in page.caption.text()
+    page.close()

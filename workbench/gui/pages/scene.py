@@ -148,12 +148,19 @@ class ScenePage(QWidget):
         self._building = True  # creating the native VTK window can send events back here
         try:
             self._build()
+        except WorkbenchError as error:  # e.g. a user-library spectrum that no longer reads
+            self._cannot_show(error)
         finally:
             self._building = False
 
     def _build(self) -> None:
         if self._warmup.is_alive():
             self._warmup.join()
+        # The images first: a source that cannot be read leaves nothing half built.
+        profile = self.workspace.profile
+        display = profile.display_model()
+        illuminant = resolve_illuminant(self._source_id)
+        images = {level: level_images(illuminant, display, level, k=profile.k) for level in LEVELS}
         from pyvistaqt import QtInteractor
 
         from workbench.scene.booth import build_booth
@@ -167,12 +174,9 @@ class ScenePage(QWidget):
         self.plotter = plotter
         self._placeholder.hide()
         self._placeholder.deleteLater()
-        profile = self.workspace.profile
-        display = profile.display_model()
-        illuminant = resolve_illuminant(self._source_id)
         for column, level in enumerate(LEVELS):
             self.plotter.subplot(0, column)
-            self._images[level] = level_images(illuminant, display, level, k=profile.k)
+            self._images[level] = images[level]
             self._handles[level] = build_booth(self.plotter, self._images[level])
             self.plotter.add_text(_VIEW_TITLES[level], position="upper_left", font_size=10,
                                   color="white")
@@ -208,8 +212,9 @@ class ScenePage(QWidget):
             self._relight()
         else:
             self._ensure_built()
-            self.plotter.ren_win.Render()
-            self._update_caption()
+            if self._handles:
+                self.plotter.ren_win.Render()
+                self._update_caption()
             self.source_changed.emit(self._source_id)
 
     def level_images(self, level: int):
@@ -285,7 +290,7 @@ class ScenePage(QWidget):
         try:
             self._relight_now()
         except WorkbenchError as error:  # e.g. a user-library spectrum that no longer reads
-            self.caption.setText(f"Cannot show {self._source_id}: {error}")
+            self._cannot_show(error)
             self.source_changed.emit(self._source_id)
 
     def _relight_now(self) -> None:
@@ -302,8 +307,15 @@ class ScenePage(QWidget):
         self._update_caption(illuminant)
         self.source_changed.emit(self._source_id)
 
+    def _cannot_show(self, error: WorkbenchError) -> None:
+        self.caption.setText(f"Cannot show {self._source_id}: {error}")
+
     def _update_caption(self, illuminant=None) -> None:
-        illuminant = illuminant or resolve_illuminant(self._source_id)
+        try:
+            illuminant = illuminant or resolve_illuminant(self._source_id)
+        except WorkbenchError as error:
+            self._cannot_show(error)
+            return
         profile = self.workspace.profile
         device = profile.device.get("name") or profile.device.get("model") or "headset"
         self.caption.setText(f"{illuminant.name} on {device}: left the level-1 textures, right "
