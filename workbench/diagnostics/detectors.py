@@ -89,6 +89,7 @@ from workbench.diagnostics.significance import (
     FAMILY_ALPHA,
     critical_p,
     f_sf,
+    t_sf,
     z_of_chi2,
     z_of_p,
 )
@@ -349,9 +350,7 @@ def detect_black_offset(context: DiagnosisContext) -> DetectorResult:
     sd = float(noise.sd_Y(black_Y)) / np.sqrt(context.black_count)
     ratio = black_Y / white_Y
     z = black_Y / sd
-    from scipy.special import stdtr
-
-    p = float(stdtr(noise.dof, -z))  # Student t: the noise is estimated
+    p = t_sf(z, noise.dof)  # Student t: the noise is estimated
     xy = xy_of(context.black)
     evidence = (f"black measures {100 * ratio:.2f} % of white (Y {black_Y:.4g} ± {sd:.2g} of "
                 f"{white_Y:.4g}, {context.black_count} distinct black row(s)) at xy "
@@ -651,8 +650,6 @@ def detect_apl_dependence_in_context(context: DiagnosisContext) -> DetectorResul
 
 def apl_dependence_result(session: Session | None, noise: NoiseModel) -> DetectorResult:
     """The ``apl-dependence`` test of ``session`` (distinct rows) against ``noise``."""
-    from scipy.special import stdtr
-
     from workbench.apl import detect_apl_dependence
 
     if session is None or not session.has_surround_data:
@@ -662,7 +659,7 @@ def apl_dependence_result(session: Session | None, noise: NoiseModel) -> Detecto
     test = detect_apl_dependence(session, relative)
     if not test.testable:
         return _untestable(APL_EFFECT, test.evidence.removeprefix("not testable: "))
-    p = float(stdtr(noise.dof, -test.z))  # one-sided: the noise is estimated
+    p = t_sf(test.z, noise.dof)  # one-sided: the noise is estimated
     # the test's own z is a normal one; the finding's is the Student t's (estimated noise)
     evidence = re.sub(r"; z = -?[0-9.]+\)", ")", test.evidence)
     result = _result(APL_EFFECT, test.statistic, test.standard_error, p,

@@ -21,7 +21,7 @@ The chi-square, F and normal tail functions come from :mod:`scipy.special`
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import chdtrc, fdtrc, ndtri
+from scipy.special import chdtrc, fdtrc, ndtri, stdtr
 
 __all__ = [
     "FAMILY_ALPHA",
@@ -32,6 +32,7 @@ __all__ = [
     "z_of_chi2",
     "chi2_sf",
     "f_sf",
+    "t_sf",
     "mean_dE00_on_fixed_colours",
 ]
 
@@ -77,6 +78,11 @@ def chi2_sf(value: float, dof: int) -> float:
 def f_sf(value: float, dfn: int, dfd: int) -> float:
     """Upper tail of Fisher's F(``dfn``, ``dfd``)."""
     return float(fdtrc(dfn, max(dfd, 1), max(float(value), 0.0)))
+
+
+def t_sf(value: float, dof: float) -> float:
+    """Upper tail of Student's t with ``dof`` degrees of freedom (one-sided p of ``value``)."""
+    return float(stdtr(dof, -float(value)))
 
 
 def mean_dE00_on_fixed_colours(XYZ_a: np.ndarray, XYZ_b: np.ndarray, white: np.ndarray) -> float:
