@@ -166,3 +166,12 @@ def test_diagnose_apl_in_one_call():
     clean = diagnose_apl(_full_field_session(), 0.002)
     assert clean.curve is None and clean.holdouts == () and "not testable" in clean.closing_note()
     json.dumps(clean.to_json())
+
+
+def test_a_short_row_in_a_colorimeter_csv_is_refused_naming_its_line(tmp_path):
+    from workbench.session_readers import read_session
+
+    path = tmp_path / "measure_Desktop_010_patch.csv"
+    path.write_text("X,Y,Z\n1,2,3\n4,5\n")
+    with pytest.raises(SpectrumFileError, match="line 3.*not three numbers"):
+        read_session(path)

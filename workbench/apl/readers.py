@@ -176,10 +176,17 @@ def _read_colorimeter_csv(path: Path) -> np.ndarray:
     if not rows or [c.strip() for c in rows[0][:3]] != ["X", "Y", "Z"]:
         raise SpectrumFileError(path, 1, "the header does not start with X,Y,Z",
                                 "give the colorimeter CSV as written by the AW3225QF measurement script")
-    try:
-        return np.array([[float(v) for v in row[:3]] for row in rows[1:] if row])
-    except ValueError:
-        raise SpectrumFileError(path, None, "a row's X,Y,Z are not numbers", "repair the file") from None
+    values = []
+    for line, row in enumerate(rows[1:], start=2):
+        if not row:
+            continue
+        try:
+            if len(row) < 3:
+                raise ValueError
+            values.append([float(v) for v in row[:3]])
+        except ValueError:
+            raise SpectrumFileError(path, line, f"{row!r} is not three numbers X,Y,Z", "repair the file") from None
+    return np.array(values, dtype=float).reshape(-1, 3)
 
 
 def read_aw3225qf_colorchecker(directory) -> Session:
