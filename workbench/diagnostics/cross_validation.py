@@ -85,7 +85,6 @@ def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, to
     """
     session = context.raw
     fold = fold_of_rows(context, folds)
-    white = context.white if context.white_count else None
     errors, groups = [], []
     drift = effects is not None and "temporal-drift" in effects
     for k in range(folds):
@@ -107,8 +106,7 @@ def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, to
                     predicted = predicted * fold_context.drift.gain(held.t_s)[:, None]
         except (InputError, np.linalg.LinAlgError, ValueError):
             return None
-        reference = white if white is not None else context.white
-        errors.append(delta_E2000(predicted, held.XYZ, reference))
+        errors.append(delta_E2000(predicted, held.XYZ, context.white))
         groups.append(_group_of_rows(held.rgb))
     if not errors:
         return None
