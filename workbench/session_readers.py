@@ -112,7 +112,14 @@ def read_ti3(path) -> Session:
     XYZ = values[:, 3:]
     scale = 1.0
     if "LUMINANCE_XYZ_CDM2" in keywords:
-        absolute = [float(v) for v in re.split(r"[\s,]+", keywords["LUMINANCE_XYZ_CDM2"].strip())]
+        try:
+            absolute = [float(v) for v in re.split(r"[\s,]+", keywords["LUMINANCE_XYZ_CDM2"].strip())]
+            if len(absolute) != 3:
+                raise ValueError
+        except ValueError:
+            raise SpectrumFileError(path, None, f"LUMINANCE_XYZ_CDM2 {keywords['LUMINANCE_XYZ_CDM2']!r} is not "
+                                    "three numbers", "give the white's absolute X Y Z in cd/m², e.g. "
+                                    '"95.1 100.0 108.9", or re-export the file') from None
         if keywords.get("NORMALIZED_TO_Y_100", "NO").upper() == "YES":
             scale = absolute[1] / 100.0
     if np.any(rgb < -1e-6) or np.any(rgb > 255 + 1e-6):

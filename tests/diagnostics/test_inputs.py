@@ -73,6 +73,17 @@ def test_a_ti3_whose_number_of_sets_disagrees_with_its_rows_is_refused(tmp_path)
     assert len(read_session(path)) == count
 
 
+@pytest.mark.parametrize("white", ["abc", "95.1 100.0"])
+def test_a_ti3_whose_absolute_white_is_not_three_numbers_is_refused(tmp_path, white):
+    from workbench.measurement.ti3 import write_session_ti3
+
+    path = write_session_ti3(simulate_session(None, seed=2), tmp_path / "session.ti3")
+    edited = tmp_path / "edited.ti3"
+    edited.write_text(re.sub(r'LUMINANCE_XYZ_CDM2 "[^"]*"', f'LUMINANCE_XYZ_CDM2 "{white}"', path.read_text()))
+    with pytest.raises(SpectrumFileError, match="LUMINANCE_XYZ_CDM2 .* is not three numbers"):
+        read_session(edited)
+
+
 def test_noise_model_is_not_fooled_by_heavy_tails_or_a_wandering_display():
     """Student-t noise is estimated without the bias of a plain median; a display that wanders
     over minutes inflates the whole scatter, not the repeatability (points measured in turn)."""
