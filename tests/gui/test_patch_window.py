@@ -18,14 +18,18 @@ if _UNAVAILABLE is not None:  # without a display Qt would abort the whole test 
 pytestmark = pytest.mark.gui
 
 
-def _colour_at_centre(window):
-    """What the window paints, at 8 bits per channel whatever the (virtual) screen's depth."""
+def _colour_at(window, x, y):
+    """What the window paints at (x, y), at 8 bits per channel whatever the (virtual) screen's depth."""
     from PySide6.QtGui import QImage
 
     image = QImage(window.size(), QImage.Format.Format_RGB32)
     window.render(image)
-    colour = image.pixelColor(window.width() // 2, window.height() // 2)
+    colour = image.pixelColor(x, y)
     return [colour.red(), colour.green(), colour.blue()]
+
+
+def _colour_at_centre(window):
+    return _colour_at(window, window.width() // 2, window.height() // 2)
 
 
 def test_a_worker_thread_shows_patches_and_gets_control_back_once_painted(qtbot):
@@ -88,3 +92,31 @@ def test_an_unknown_screen_lists_the_screens(qtbot):
     with pytest.raises(InputError, match="no screen 99; choose one of: 0: "):
         PatchWindow(99)
     assert screen_names()[0].startswith("0: ")
+
+
+def test_an_apl_patch_is_a_centred_window_on_its_surround(qtbot):
+    window = PatchWindow(0)
+    qtbot.addWidget(window)
+    display = QtPatchDisplay(window, timeout_s=5.0)
+    qtbot.waitExposed(window)
+    errors = []
+
+    def worker():
+        try:
+            display.show([250, 240, 230], window=0.25, surround=[20, 30, 40])
+            assert window.last_painted_frame == ([250, 240, 230], 0.25, [20, 30, 40])
+        except Exception as error:  # noqa: BLE001 - reported below
+            errors.append(error)
+
+    thread = threading.Thread(target=worker)
+    thread.start()
+    qtbot.waitUntil(lambda: not thread.is_alive(), timeout=10_000)
+    assert errors == []
+    rect = window.patch_rect()
+    area = rect.width() * rect.height() / (window.width() * window.height())
+    assert area == pytest.approx(0.25, rel=0.02)
+    assert rect.center().x() == pytest.approx(window.width() / 2, abs=1)
+    assert _colour_at(window, window.width() // 2, window.height() // 2) == [250, 240, 230]
+    assert _colour_at(window, 1, 1) == [20, 30, 40]
+    display.show([9, 9, 9])  # full field again: the surround is gone
+    assert _colour_at(window, 1, 1) == [9, 9, 9] and window.frame == ([9, 9, 9], 1.0, [0, 0, 0])
