@@ -39,21 +39,20 @@ def vive_profile():
     return load_profile(example_profile_path("htc-vive-paper"))
 
 
-@pytest.fixture(scope="session")
-def simulated_bundle(tmp_path_factory, simulated_profile, paint_cube):
+def _bundle(tmp_path_factory, name, profile, cube):
+    """(directory, summary) of ``profile``'s bundle with :data:`BUNDLE_LIGHTS` and the paint cube."""
     from workbench.export import write_bundle
 
-    directory = tmp_path_factory.mktemp("bundles") / "simulated"
-    summary = write_bundle(simulated_profile, directory, light_ids=BUNDLE_LIGHTS,
-                           cubes=[("paint", paint_cube)])
-    return directory, summary
+    directory = tmp_path_factory.mktemp("bundles") / name
+    return directory, write_bundle(profile, directory, light_ids=BUNDLE_LIGHTS,
+                                   cubes=[("paint", cube)])
+
+
+@pytest.fixture(scope="session")
+def simulated_bundle(tmp_path_factory, simulated_profile, paint_cube):
+    return _bundle(tmp_path_factory, "simulated", simulated_profile, paint_cube)
 
 
 @pytest.fixture(scope="session")
 def vive_bundle(tmp_path_factory, vive_profile, paint_cube):
-    from workbench.export import write_bundle
-
-    directory = tmp_path_factory.mktemp("bundles") / "vive"
-    summary = write_bundle(vive_profile, directory, light_ids=BUNDLE_LIGHTS,
-                           cubes=[("paint", paint_cube)])
-    return directory, summary
+    return _bundle(tmp_path_factory, "vive", vive_profile, paint_cube)
