@@ -123,19 +123,27 @@ class _Markdown:
 
 
 def _suite_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seed", type=int, default=0, help="suite seed (default 0)")
+    parser.add_argument("--seed", type=int, default=0, help="first suite seed (default 0)")
+    parser.add_argument("--suites", type=int, default=None, metavar="N",
+                        help="suites pooled, seeds SEED … SEED+N−1 (default: the acceptance "
+                             "test's 10, 940 sessions)")
 
 
 def _suite_run(args: argparse.Namespace):
     try:
-        from tests.diagnostics.suite import run_suite
+        from tests.diagnostics.suite import SUITE_SEEDS, pooled_cases, run_suite
     except ImportError as error:
         from workbench.errors import WorkbenchError
 
         raise WorkbenchError("the acceptance suite's independent generator lives in the "
                              f"checkout's tests/diagnostics ({error}); run this from the "
                              "checkout's root") from None
-    return run_suite(args.seed)
+    suites = SUITE_SEEDS if args.suites is None else args.suites
+    if suites < 1:
+        from workbench.errors import InputError
+
+        raise InputError(f"--suites {suites}: give at least 1 suite to run")
+    return run_suite(cases=pooled_cases(suites, args.seed))
 
 
 BENCHMARKS: dict[str, Benchmark] = {

@@ -6,13 +6,18 @@ statistic, its standard error propagated from the session's noise model
 paper's model holds for this effect":
 
 ``temporal-drift``
-    χ² of the distinct white references (copies left out) about their mean,
-    ``n − 1`` degrees of freedom, as an F-test against the noise estimate's
-    own degrees of freedom; with six or more references it must also hold
-    without the most deviant one when that one is less than
+    two tests of the distinct white references (copies left out), each an
+    F-test against the noise estimate's own degrees of freedom, the smaller
+    p-value doubled (Bonferroni over the two). *Any change*: their χ² about
+    their mean, ``n − 1`` dof; with six or more references it must also
+    hold without the most deviant one when that one is less than
     :data:`OUTLIER_SIGMA` standard deviations off (one bad reading is not a
     drift; a reference far beyond that, such as the first one of a warm-up,
-    is a real change); against session time, or against row order
+    is a real change). *A smooth trend*: the part of that χ² a weighted
+    Legendre polynomial in time of degree :data:`DRIFT_TREND_DEGREE`
+    explains (a warm-up, a decline, a step, a slow wander: few dof, so more
+    power, and one bad reading spreads over the whole curve); against
+    session time, or against row order
     where the session has no times (a ``.ti3``: its rows are in measurement
     order), and the evidence says which. Statistic: the span of the
     references. The form is named: warm-up, decline, step or wander.
@@ -111,6 +116,10 @@ __all__ = [
     "detect_temporal_drift",
     "detect_black_offset",
     "detect_channel_interaction",
+    "common_gain_test",
+    "CommonGainTest",
+    "CHANNEL_SPECIFIC_ALPHA",
+    "CHANNEL_SPECIFIC_SHARE",
     "detect_chromaticity_shift",
     "detect_tone_curve_shape",
     "tone_data",
@@ -120,6 +129,12 @@ CHANNEL_NAMES = ("red", "green", "blue")
 OUTLIER_SIGMA = 8.0
 """A single white reference closer than this (in σ) to the others' median may be a bad reading:
 instrument readings have heavier tails than a Gaussian (a Student t), but not this heavy."""
+
+DRIFT_TREND_DEGREE = 3
+"""Highest Legendre degree of the drift test's smooth trend (fewer where there are fewer
+references): a cubic in time follows a warm-up that settles, a decline, a step seen by a few
+references and a wander of one or two swings, with three dof where the any-change test spends
+``n − 1``."""
 
 MIN_TONE_LEVELS = 5
 """A channel's shape is tested only with this many sweep levels below full drive."""
@@ -294,6 +309,16 @@ def _drift_form(drift: DriftCorrection, sd: float) -> str:
     return "a wander (the display is unstable)"
 
 
+def _trend_chi2(times: np.ndarray, Y: np.ndarray, sd: np.ndarray, degree: int) -> float:
+    """χ² a weighted Legendre polynomial in time of ``degree`` explains beyond the weighted mean."""
+    span = float(np.ptp(times))
+    x = 2.0 * (times - times.min()) / span - 1.0 if span > 0 else np.zeros_like(times)
+    basis = np.polynomial.legendre.legvander(x, degree) / sd[:, None]
+    coefficients, *_ = np.linalg.lstsq(basis, Y / sd, rcond=None)
+    mean = float(np.sum(Y / sd ** 2) / np.sum(1.0 / sd ** 2))
+    return float(np.sum((basis @ coefficients - mean / sd) ** 2))
+
+
 def detect_temporal_drift_raw(drift: DriftCorrection | None, time_basis: str,
                               noise: NoiseModel) -> DetectorResult:
     """The drift test on already collected references (module doc)."""
@@ -319,6 +344,11 @@ def detect_temporal_drift_raw(drift: DriftCorrection | None, time_basis: str,
         without = everything.copy()
         without[worst] = False
         p = max(p, f_sf(steady_chi2(without) / (dof - 1), dof - 1, noise.dof))
+    p_any = p
+    degree = min(DRIFT_TREND_DEGREE, dof)
+    trend_chi2 = _trend_chi2(drift.times, Y, sd, degree)
+    p_trend = f_sf(trend_chi2 / degree, degree, noise.dof)
+    p = min(1.0, 2.0 * min(p_any, p_trend))
     relative_sd = float(np.median(sd / Y))
     form = _drift_form(drift, relative_sd)
     unit = "s" if time_basis == "time" else ""
@@ -327,14 +357,16 @@ def detect_temporal_drift_raw(drift: DriftCorrection | None, time_basis: str,
     low, high = int(np.argmin(drift.gains)), int(np.argmax(drift.gains))
     evidence = (f"the {Y.size} distinct white references vary by {100 * drift.span:.1f} % {where} "
                 f"(χ² {chi2:.1f} on {dof} dof against a steady white with the session's "
-                f"{100 * relative_sd:.2f} % repeatability): {form}; lowest "
+                f"{100 * relative_sd:.2f} % repeatability, {trend_chi2:.1f} of it on a smooth "
+                f"trend of {degree} dof): {form}; lowest "
                 f"{100 * drift.gains[low]:.1f} % of the reference state at "
                 f"{'t = ' if unit else 'row '}{drift.times[low]:.0f}{' s' if unit else ''}, "
                 f"highest {100 * drift.gains[high]:.1f} %")
     return _result("temporal-drift", drift.span, np.sqrt(2) * relative_sd, p, evidence,
                    {"times": drift.times.tolist(), "time_basis": time_basis,
                     "relative_white": drift.gains.tolist(), "chi2": chi2, "dof": dof,
-                    "form": form}, z=z_of_chi2(chi2, dof))
+                    "trend_chi2": trend_chi2, "trend_dof": degree, "p_any_change": p_any,
+                    "p_smooth_trend": p_trend, "form": form}, z=z_of_chi2(chi2, dof))
 
 
 def detect_temporal_drift(context: DiagnosisContext) -> DetectorResult:
@@ -368,26 +400,96 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
     if context.white_count == 0:
         return _untestable("channel-interaction", "no white measured beside the primaries")
     noise = context.noise
-    summed = sum(s.full_XYZ for s in context.sweeps)  # black subtracted
-    white = context.white - context.black
+    white, summed, covariance = _white_against_sum(context)
     difference = white - summed
-    covariance = _mean_covariance(noise, context.white, context.white_count)
-    covariance = covariance + 4 * _mean_covariance(noise, context.black, context.black_count)
-    for sweep in context.sweeps:
-        covariance = covariance + _mean_covariance(noise, sweep.full_XYZ + context.black,
-                                                   sweep.full_count)
     chi2 = float(difference @ np.linalg.solve(covariance, difference))
     p = f_sf(chi2 / 3, 3, noise.dof)  # the noise is estimated: F, not χ²
     ratio = white / summed
     statistic = 1.0 - float(ratio[1])
     standard_error = float(np.sqrt(covariance[1, 1]) / summed[1])
     direction = "falls short of" if ratio[1] < 1 else "exceeds"
+    common = common_gain_test(context)
     evidence = (f"white measures {100 * ratio[1]:.1f} % of R+G+B in luminance "
                 f"(X {100 * ratio[0]:.1f} %, Z {100 * ratio[2]:.1f} %, black subtracted; "
                 f"± {100 * standard_error:.2f} %, χ² {chi2:.1f} on 3 dof): the full-drive "
-                f"mixture {direction} the sum of its primaries")
+                f"mixture {direction} the sum of its primaries; "
+                + ("channel by channel (one gain common to every channel leaves χ² "
+                   f"{common.chi2:.1f} on 2 dof, p {common.p_value:.2g}; the channels' own "
+                   f"shortfalls {', '.join(f'{100 * a:.1f}' for a in common.amounts)} % against "
+                   f"{100 * (1 - common.gain):.1f} % common: subpixel crosstalk)"
+                   if common.channel_specific else
+                   "as one gain on every channel (the channels' own shortfalls "
+                   f"{', '.join(f'{100 * a:.1f}' for a in common.amounts)} % against "
+                   f"{100 * (1 - common.gain):.1f} % common: a backlight or a power limit)"))
     return _result("channel-interaction", statistic, standard_error, p, evidence,
-                   {"white_over_sum": ratio.tolist(), "chi2": chi2}, z=z_of_chi2(chi2, 3))
+                   {"white_over_sum": ratio.tolist(), "chi2": chi2,
+                    "common_gain_chi2": common.chi2, "common_gain_p": common.p_value,
+                    "channel_specific": common.channel_specific}, z=z_of_chi2(chi2, 3))
+
+
+def _white_against_sum(context: DiagnosisContext):
+    """(white − black, Σ black-subtracted full primaries, covariance of their difference)."""
+    noise = context.noise
+    summed = sum(s.full_XYZ for s in context.sweeps)  # black subtracted
+    white = context.white - context.black
+    covariance = _mean_covariance(noise, context.white, context.white_count)
+    covariance = covariance + 4 * _mean_covariance(noise, context.black, context.black_count)
+    for sweep in context.sweeps:
+        covariance = covariance + _mean_covariance(noise, sweep.full_XYZ + context.black,
+                                                   sweep.full_count)
+    return white, summed, covariance
+
+
+CHANNEL_SPECIFIC_ALPHA = 0.001
+"""Level at which the white's departure from the sum of the primaries is called channel by
+channel rather than one gain common to every channel (strict: the call gives an interaction a
+shape that reaches every mixture, so a full-drive primary read a few σ off by heavy-tailed
+instrument noise must not make it)…"""
+
+CHANNEL_SPECIFIC_SHARE = 0.5
+"""…and only where the channels' own amounts depart from the common one by more than this share
+of it (a power limit whose white is a trace bluer than R+G+B is still a common gain)."""
+
+
+@dataclass(frozen=True)
+class CommonGainTest:
+    """Whether the white's departure from R+G+B is one gain on every channel (``W − K = g Σ``)."""
+
+    gain: float
+    chi2: float  # left by the best common gain, 2 dof
+    p_value: float
+    amounts: tuple = (0.0, 0.0, 0.0)  # each channel's own shortfall at white, 1 − (W−K)/P solved
+
+    @property
+    def spread(self) -> float:
+        """Largest departure of a channel's own amount from the common one (``1 − gain``)."""
+        return float(np.max(np.abs(np.asarray(self.amounts) - (1.0 - self.gain))))
+
+    @property
+    def channel_specific(self) -> bool:
+        return (self.p_value <= CHANNEL_SPECIFIC_ALPHA
+                and self.spread > CHANNEL_SPECIFIC_SHARE * abs(1.0 - self.gain))
+
+
+def common_gain_test(context: DiagnosisContext) -> CommonGainTest | None:
+    """Generalized least squares of ``W − K`` on ``g Σ(P − K)``; F-test of what is left.
+
+    A backlight that follows the picture and a power limit scale every
+    channel alike: the white keeps the chromaticity of the primaries' sum.
+    Subpixel crosstalk couples each channel to its neighbours by its own
+    amount and moves it. None without a white.
+    """
+    if context.white_count == 0:
+        return None
+    white, summed, covariance = _white_against_sum(context)
+    inverse = np.linalg.inv(covariance)
+    gain = float(summed @ inverse @ white / (summed @ inverse @ summed))
+    left = white - gain * summed
+    chi2 = float(left @ inverse @ left)
+    matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
+    amounts = tuple(float(a) for a in 1.0 - np.linalg.solve(matrix, white))
+    return CommonGainTest(gain=gain, chi2=chi2, p_value=f_sf(chi2 / 2, 2, context.noise.dof),
+                          amounts=amounts)
 
 
 def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):

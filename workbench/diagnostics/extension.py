@@ -5,7 +5,9 @@ channel the tone-curve form with the lowest BIC (GOG, extended power, or the
 monotone spline / 1D LUT); ``chromaticity-shift`` → level-dependent primaries;
 ``channel-interaction`` → per-channel co-drive gains, their amounts fitted
 on the white references in X, Y and Z and their shape on the greys where
-there are greys (never on validation rows); ``temporal-drift`` → the fit data
+there are greys (never on validation rows); without greys, the shape of
+subpixel crosstalk where the white departs from R+G+B channel by channel,
+else the most conservative shape; ``temporal-drift`` → the fit data
 are divided by the drift ``g(t)`` from the white references, and predictions
 for a measurement at time ``t`` are multiplied by it.
 
@@ -19,14 +21,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from workbench.diagnostics.detectors import DiagnosisContext, tone_data
+from workbench.diagnostics.detectors import DiagnosisContext, common_gain_test, tone_data
 from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift, partial_greys, xy_of
 from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
 from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_tone_curve
 
 __all__ = ["TERMS", "TONE_CHANGING_EFFECTS", "PARAMETRIC_TONE_FORMS",
-           "DEFAULT_INTERACTION_EXPONENT", "MATERIALITY_INTERACTION_EXPONENT", "fitted_on", "fit_extended",
-           "grey_channel_outputs"]
+           "DEFAULT_INTERACTION_EXPONENT", "MATERIALITY_INTERACTION_EXPONENT", "CROSSTALK_EXPONENT",
+           "fitted_on", "fit_extended", "grey_channel_outputs", "interaction_shape"]
 
 TERMS = {
     "temporal-drift": "drift correction from the white references",
@@ -38,11 +40,16 @@ TERMS = {
 """Effect id → the model term that answers it."""
 
 
-def fitted_on(effect: str, session) -> str:
-    """Which rows the term answering ``effect`` was fitted on (never validation rows)."""
+def fitted_on(effect: str, session, context: DiagnosisContext | None = None) -> str:
+    """Which rows the term answering ``effect`` was fitted on (never validation rows).
+
+    ``context`` (the diagnosis's) says how an interaction's shape was chosen
+    where the greys cannot choose it.
+    """
     n_white = int(session.mask("white").sum())
     n_grey = int(session.mask("grey").sum())
     sweeps = int(session.mask("ramp-r", "ramp-g", "ramp-b").sum())
+    basis = None if context is None else interaction_shape(context)[1]
     return {
         "temporal-drift": f"the {n_white} white references over time, smoothed as far as "
                           "their noise allows",
@@ -50,7 +57,12 @@ def fitted_on(effect: str, session) -> str:
         "tone-curve-shape": f"the {sweeps} sweep points" + (f" and {n_grey} greys" if n_grey else ""),
         "chromaticity-shift": f"the chromaticity of the {sweeps} sweep points",
         "channel-interaction": f"the {n_white} white references against the full-drive primaries"
-                               + (f", its shape on the {n_grey} greys" if n_grey >= 5 else
+                               + (f", its shape on the {n_grey} greys" if basis == "greys" else
+                                  "; its partial-drive shape is not fitted without greys: the white "
+                                  "departs from R+G+B channel by channel, which is subpixel "
+                                  "crosstalk, coupled through each neighbour's drive (co-drive "
+                                  f"exponent {CROSSTALK_EXPONENT:g} in linear light, about linear "
+                                  "in drive)" if basis == "channel-specific" else
                                   "; its partial-drive shape is not identified without greys, so "
                                   "the most conservative one (co-drive exponent "
                                   f"{DEFAULT_INTERACTION_EXPONENT:g}: white and colours near it)"),
@@ -89,7 +101,8 @@ INTERACTION_EXPONENTS = (0.5, 1.0, 2.0, 3.0, 5.0, 8.0)
 
 DEFAULT_INTERACTION_EXPONENT = 8.0
 """``p`` where the fit rows cannot identify the shape (fewer than five greys above 10 % drive:
-the paper's plan, whose only mixture is white). The white fixes the amounts but says nothing
+the paper's plan, whose only mixture is white) and the white departs from R+G+B by one gain
+common to every channel (else :data:`CROSSTALK_EXPONENT`). The white fixes the amounts but says nothing
 about partial drive, where backlights, crosstalk and power limits differ by a factor of ten
 (``p`` from 0.5 to 8 spans them); the most conservative shape is taken: the largest ``p`` the
 profile schema allows, which corrects white and the colours near it and leaves partial-drive
@@ -101,8 +114,32 @@ middle of the shapes real displays span (0.5 to 8). Naming asks whether the effe
 colours, and the conservative shape would call every interaction immaterial by construction;
 the model term keeps the conservative shape, since it must not cost held-out accuracy."""
 
+CROSSTALK_EXPONENT = 0.5
+"""``p`` where the fit rows hold no greys but the white departs from R+G+B channel by channel
+(:func:`~workbench.diagnostics.detectors.common_gain_test`). A backlight that follows the
+picture and a power limit scale every channel alike, and their shapes differ by a factor of ten;
+a channel-specific departure is subpixel crosstalk, which couples a channel to its neighbours'
+drive voltage: about linear in drive, ``p ≈ 1/γ`` in linear light. Every real LCD in the
+shared data whose greys identify the shape picks 0.5 or 1."""
+
 MAX_INTERACTION_AMOUNT = 0.95
 """Per-channel amounts are clipped to ±this (the profile schema allows (−1, 1))."""
+
+
+def interaction_shape(context: DiagnosisContext) -> tuple[float | None, str]:
+    """How the co-drive exponent is chosen: (exponent or None, basis).
+
+    basis ``"greys"`` (fitted on them; exponent None until fitted),
+    ``"channel-specific"`` (:data:`CROSSTALK_EXPONENT`) or ``"unidentified"``
+    (None: the caller's default).
+    """
+    greys = partial_greys(context.fit.rgb) & ~context.copies
+    if (context.fit.rgb[greys, 0] / 255.0 > 0.1).sum() >= 5:
+        return None, "greys"
+    common = common_gain_test(context)
+    if common is not None and common.channel_specific:
+        return CROSSTALK_EXPONENT, "channel-specific"
+    return None, "unidentified"
 
 
 def _interaction_term(context: DiagnosisContext, default_exponent: float = DEFAULT_INTERACTION_EXPONENT
@@ -110,8 +147,10 @@ def _interaction_term(context: DiagnosisContext, default_exponent: float = DEFAU
     """Per-channel co-drive gains: ``a_c`` from the white, ``p`` (and ``a_c``) from the greys.
 
     Without greys, ``W − K = Σ_c (1 − a_c) P_c`` in X, Y and Z gives the three
-    ``a_c`` exactly and ``p`` is :data:`DEFAULT_INTERACTION_EXPONENT` (the
-    most conservative shape: the partial-drive shape is not identified). Where
+    ``a_c`` exactly and ``p`` is :data:`CROSSTALK_EXPONENT` where the white
+    departs from R+G+B channel by channel (:func:`interaction_shape`), else
+    ``default_exponent`` (:data:`DEFAULT_INTERACTION_EXPONENT`, the most
+    conservative shape: the partial-drive shape is not identified). Where
     the fit rows hold at least five greys above 10 % drive, ``a_c`` are the
     least-squares solution over the white and the greys (relative error in
     X, Y, Z; channel outputs from the sweeps: through their points where a
@@ -124,7 +163,8 @@ def _interaction_term(context: DiagnosisContext, default_exponent: float = DEFAU
     amounts = 1.0 - np.linalg.solve(matrix, white)
     summed = matrix.sum(axis=1)
     amount = float(1.0 - white[1] / summed[1])
-    exponent = default_exponent
+    assumed, basis = interaction_shape(context)
+    exponent = default_exponent if assumed is None else assumed
     greys = partial_greys(context.fit.rgb) & ~context.copies
     drive = context.fit.rgb[greys, 0] / 255.0
     keep = drive > 0.1

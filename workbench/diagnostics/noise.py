@@ -116,9 +116,11 @@ class NoiseModel:
     dof : float
         Degrees of freedom of the estimate of ``a`` (tests use Student t / F
         with it, so an estimate from few points cannot produce findings):
-        half the residual differences it came from (heavy-tailed noise makes
-        a variance estimate about half as precise as a Gaussian one), or
-        :data:`DEFAULT_DOF` for the stated default.
+        Satterthwaite's, from the squares the estimate averaged
+        (:func:`effective_dof`: their count, shrunk by the dispersion of the
+        squares, which heavy-tailed noise raises, and by the overlap of
+        successive differences), or :data:`DEFAULT_DOF` for the stated
+        default.
     copies : int
         Rows excluded as exact copies of an earlier row.
     """
@@ -287,6 +289,32 @@ def _robust_variance(squares: np.ndarray) -> float:
     return float(np.mean(np.minimum(squares, 16.0 * scale)))
 
 
+SUCCESSIVE_OVERLAP = 1.5
+"""Variance inflation of a mean of squared successive differences: neighbouring differences share
+a residual (correlation −½, so ¼ between their squares: 1 + 2 · ¼)."""
+
+
+def effective_dof(squares: np.ndarray, overlap: float = 1.0) -> float:
+    """Satterthwaite's degrees of freedom of a variance estimated as the mean of ``squares``.
+
+    ``2 n mean² / var`` of the squares (winsorized as :func:`_robust_variance`
+    does), divided by ``overlap`` where the squares are correlated; never more
+    than a Gaussian sample of the same size (``n / overlap``). Heavy-tailed
+    noise (a Student t with 6 dof has squares twice as dispersed as a
+    Gaussian's) gets proportionally fewer: an F-test against it then keeps its
+    stated false-alarm rate, whatever the noise's tails, without assuming them.
+    """
+    squares = np.asarray(squares, dtype=float)
+    n = squares.size
+    if n < 2:
+        return 1.0
+    scale = float(np.median(squares) / _CHI2_1_MEDIAN)
+    kept = np.minimum(squares, 16.0 * scale)
+    mean = float(np.mean(kept))
+    dispersion = float(np.var(kept, ddof=1)) / mean ** 2 if mean > 0 else 2.0
+    return max(n / overlap * 2.0 / max(dispersion, 2.0), 1.0)
+
+
 def estimate_noise(session: Session) -> NoiseModel:
     """The noise model of ``session`` (its fit rows; module doc for the method).
 
@@ -359,11 +387,11 @@ def estimate_noise(session: Session) -> NoiseModel:
     if len(successive_sq) >= _MIN_POINTS:
         relative = _robust_variance(np.asarray(successive_sq))
         source = "sweep scatter"
-        dof = len(successive_sq) / 2.0
+        dof = effective_dof(successive_sq, SUCCESSIVE_OVERLAP)
     elif repeat_gain is not None:
         relative = repeat_gain ** 2
         source = "repeats"
-        dof = max(len(repeat_sq) - groups, 1) / 2.0
+        dof = max(effective_dof(repeat_sq) * (len(repeat_sq) - groups) / len(repeat_sq), 1.0)
     else:
         relative = DEFAULT_GAIN_SD ** 2
         source = "instrument default"

@@ -210,7 +210,7 @@ def _term_json(effect: str, diagnosis: "Diagnosis") -> dict:
     if effect == APL_EFFECT:
         return {"effect": effect, "term": APL_TERM, "fitted_on": diagnosis.apl.curve.fitted_on}
     return {"effect": effect, "term": TERMS[effect],
-            "fitted_on": fitted_on(effect, diagnosis.context.fit)}
+            "fitted_on": fitted_on(effect, diagnosis.context.fit, diagnosis.context)}
 
 
 def load_relative_noise(context: DiagnosisContext) -> np.ndarray:
