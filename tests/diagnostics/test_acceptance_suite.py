@@ -148,6 +148,34 @@ def test_the_drift_correction_is_smoothed_to_the_references_noise():
     assert np.max(np.abs(sharp.gain(times) - step)) < 0.004
 
 
+def test_the_drift_corrections_uncertainty_is_half_a_change_midway_and_nil_at_references():
+    from workbench.diagnostics.evidence import DriftCorrection
+
+    times = np.array([0.0, 10.0, 20.0, 30.0])
+    gains = np.array([0.96, 1.0, 1.0, 1.0])  # a warm-up the second reference already missed
+    drift = DriftCorrection(times, gains, gains)
+    u = drift.uncertainty(np.array([-5.0, 0.0, 2.5, 5.0, 10.0, 15.0, 35.0]))
+    change = 0.04 / 0.98
+    assert u[[0, 1, 4, 5, 6]] == pytest.approx(0.0)  # outside, at references, references agree
+    assert u[3] == pytest.approx(change / 2)  # midway: the change happened before or after
+    assert u[2] == pytest.approx(change * np.sqrt(0.25 * 0.75))
+
+
+def test_a_sweep_measured_across_a_drift_step_carries_the_corrections_uncertainty():
+    from workbench.diagnostics.detectors import build_context
+
+    generated = generate_session({"temporal-drift": "step"}, seed=41)
+    context = build_context(generated.session.without("validation"))
+    assert context.drift_found
+    uncertain = [s.correction_sd for s in context.sweeps]
+    assert all(u is not None for u in uncertain)
+    # the sweep measured while the display stepped carries up to half the step; the others none
+    step = float(np.ptp(context.drift.gain(generated.session.t_s)))
+    largest = max(float(u.max()) for u in uncertain)
+    assert 0.3 * step < largest <= 0.5 * step + 1e-9
+    assert min(float(np.median(u)) for u in uncertain) < 1e-3
+
+
 @pytest.mark.slow
 def test_acceptance_rates_on_the_seeded_suite():
     result = run_suite(cases=pooled_cases(SUITE_SEEDS))
@@ -156,8 +184,9 @@ def test_acceptance_rates_on_the_seeded_suite():
     assert result.clean_rate <= 0.05
     assert result.false_rate <= 0.05
     assert all(result.named_rate(effect) >= 0.95 for effect in result.effect_sessions)
-    # every miss is below noise, and says so with its figures
-    assert all("below noise" in miss for miss in result.misses())
+    # every miss is below noise or below the materiality floor, and says so with its figures
+    assert all("below noise" in miss or "below the materiality floor" in miss
+               for miss in result.misses())
     assert np.median(result.gains_pct) >= 30
     assert result.clean_losses == 0
     # where the plan can identify the effect and the effect reaches the held-out colours

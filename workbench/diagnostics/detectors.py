@@ -263,7 +263,9 @@ def build_context(fit_session: Session, drift_found: bool | None = None,
     blacks = np.all(corrected.rgb <= 0, axis=1) & ~copies
     black = corrected.XYZ[blacks].mean(axis=0) if blacks.any() else np.zeros(3)
     whites = np.all(corrected.rgb >= 255, axis=1) & ~copies
-    sweeps = channel_sweeps(corrected, black, keep=~copies)
+    uncertain = (drift.uncertainty(fit_session.t_s) if (drift is not None and drift_found)
+                 else None)
+    sweeps = channel_sweeps(corrected, black, keep=~copies, correction_sd=uncertain)
     white = (corrected.XYZ[whites].mean(axis=0) if whites.any()
              else black + sum(s.full_XYZ for s in sweeps))  # ramps only: the additive white
     if load_session is not None:
@@ -705,6 +707,9 @@ def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
         drive = np.concatenate([np.zeros(context.black_count), sweep.drive])
         counts = np.concatenate([np.ones(context.black_count), sweep.counts])
         sd = context.noise.sd_Y(Y) / np.sqrt(counts)
+        if sweep.correction_sd is not None:  # a drift correction's own uncertainty
+            correction = np.concatenate([np.zeros(context.black_count), sweep.correction_sd])
+            sd = np.hypot(sd, correction * Y)
         return _tone_test_points(drive, Y, sd, black[1], float(sweep.full_XYZ[1]),
                                  context.noise.dof)
     if greys is None:
@@ -713,8 +718,10 @@ def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
     full_Y = float(sweep.full_XYZ[1])
     drive = np.concatenate([sweep.drive, grey_drive])
     L = np.concatenate([sweep.output, outputs[:, sweep.channel]])
-    sd = np.concatenate([context.noise.sd_Y(sweep.XYZ[:, 1] + context.black[1]) / full_Y
-                         / np.sqrt(sweep.counts), grey_sd[:, sweep.channel]])
+    own = context.noise.sd_Y(sweep.XYZ[:, 1] + context.black[1]) / full_Y / np.sqrt(sweep.counts)
+    if sweep.correction_sd is not None:
+        own = np.hypot(own, sweep.correction_sd * sweep.output)
+    sd = np.concatenate([own, grey_sd[:, sweep.channel]])
     return _tone_test_points(drive, L, sd, 0.0, 1.0, context.noise.dof)
 
 

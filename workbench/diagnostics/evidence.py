@@ -55,6 +55,30 @@ class DriftCorrection:
         curve = self.gains if self.smoothed is None else self.smoothed
         return np.interp(np.asarray(t_s, dtype=float), self.times, curve)
 
+    def uncertainty(self, t_s) -> np.ndarray:
+        """Relative SD of ``g(t)`` from not knowing when, between two references, it changed.
+
+        The correction ramps from one reference to the next; a display that
+        changed at an unknown moment in between (a step, a warm-up faster
+        than the references) is off the ramp by ``Δ (1[τ < u] − u)`` at the
+        fraction ``u`` of the interval, whose RMS over a change time ``τ``
+        anywhere in it is ``|Δ| √(u (1 − u))``: zero at the references, at
+        most half the change midway. Zero outside the references (held
+        flat) and where neighbouring references agree.
+        """
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        curve = self.gains if self.smoothed is None else self.smoothed
+        out = np.zeros(t.shape)
+        if self.times.size < 2:
+            return out
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+        width = self.times[k + 1] - self.times[k]
+        inside = (t > self.times[0]) & (t < self.times[-1]) & (width > 0)
+        u = np.where(inside, (t - self.times[k]) / np.where(width > 0, width, 1.0), 0.0)
+        change = np.abs(curve[k + 1] - curve[k]) / np.abs(curve[k + 1] + curve[k]) * 2.0
+        out[inside] = (change * np.sqrt(u * (1.0 - u)))[inside]
+        return out
+
     def smoothed_to_noise(self, relative_sd: np.ndarray) -> "DriftCorrection":
         """The correction with its curve smoothed as far as the references' noise allows.
 
@@ -144,6 +168,7 @@ class ChannelSweep:
     XYZ: np.ndarray
     full_XYZ: np.ndarray
     counts: np.ndarray | None = None
+    correction_sd: np.ndarray | None = None  # relative SD of each level's drift correction
 
     @property
     def output(self) -> np.ndarray:
@@ -159,9 +184,13 @@ class ChannelSweep:
         return 1 if self.counts is None else int(self.counts[-1])
 
 
-def channel_sweeps(session: Session, black: np.ndarray, keep: np.ndarray | None = None
-                   ) -> tuple[ChannelSweep, ...]:
-    """The three black-subtracted sweeps (single-channel rows), rows ``keep`` only."""
+def channel_sweeps(session: Session, black: np.ndarray, keep: np.ndarray | None = None,
+                   correction_sd: np.ndarray | None = None) -> tuple[ChannelSweep, ...]:
+    """The three black-subtracted sweeps (single-channel rows), rows ``keep`` only.
+
+    ``correction_sd``: each row's relative drift-correction uncertainty
+    (:meth:`DriftCorrection.uncertainty`); each level gets that of its mean.
+    """
     sweeps = []
     keep = np.ones(len(session), dtype=bool) if keep is None else keep
     for channel, kind in enumerate(RAMP_KINDS):
@@ -175,8 +204,15 @@ def channel_sweeps(session: Session, black: np.ndarray, keep: np.ndarray | None 
         XYZ = session.XYZ[rows] - black
         unique, inverse, counts = np.unique(levels, return_inverse=True, return_counts=True)
         mean_XYZ = np.array([XYZ[inverse == i].mean(axis=0) for i in range(unique.size)])
+        level_sd = None
+        if correction_sd is not None:
+            rows_sd = correction_sd[rows]
+            # the rows of one level are corrected at different times: their errors are not
+            # independent (a step between them moves them alike), so the mean keeps the RMS
+            level_sd = np.array([np.sqrt(np.mean(rows_sd[inverse == i] ** 2))
+                                 for i in range(unique.size)])
         sweeps.append(ChannelSweep(channel=channel, drive=unique / 255.0, XYZ=mean_XYZ,
-                                   full_XYZ=mean_XYZ[-1], counts=counts))
+                                   full_XYZ=mean_XYZ[-1], counts=counts, correction_sd=level_sd))
     return tuple(sweeps)
 
 
