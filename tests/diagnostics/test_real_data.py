@@ -72,3 +72,21 @@ def test_argyll_missing_says_so(monkeypatch):
     monkeypatch.setattr(shutil, "which", lambda name: None)
     score = argyll.score_argyll(Session(kind=["white"], rgb=[[255, 255, 255]], XYZ=[[95, 100, 108]]))
     assert score.mean_dE00 is None and "argyll" in score.unavailable
+
+
+@needs_real_data
+def test_a_real_lcd_without_its_greys_takes_the_crosstalk_shape_and_keeps_most_of_the_gain():
+    # the KOIOS's white departs from R+G+B channel by channel (its own shortfalls −29, −41 and
+    # +9 %); with its greys the shape is fitted (exponent 0.5), without them it is taken
+    from workbench.diagnostics import diagnose
+    from workbench.diagnostics.extension import CROSSTALK_EXPONENT
+    from workbench.session_readers import read_session
+
+    session = read_session(LCD / "KOIOS_K2418U_2019-04-01_1518_i1d3_417p.ti3")
+    without_greys = session.subset(session.kind != "grey")
+    diagnosis = diagnose(without_greys)
+    finding = next(f for f in diagnosis.findings if f.effect == "channel-interaction")
+    assert finding.in_model and "channel by channel" in finding.evidence
+    assert diagnosis.extended.interaction.exponent == CROSSTALK_EXPONENT
+    # the conservative shape kept 5.3 of the baseline's 6.2 mean ΔE00; this one about half
+    assert diagnosis.extended_score.mean_dE00 < 0.6 * diagnosis.baseline_score.mean_dE00
