@@ -49,7 +49,8 @@ def fitted_on(effect: str, session, context: DiagnosisContext | None = None) -> 
     n_white = int(session.mask("white").sum())
     n_grey = int(session.mask("grey").sum())
     sweeps = int(session.mask("ramp-r", "ramp-g", "ramp-b").sum())
-    basis = None if context is None else interaction_shape(context)[1]
+    basis = (interaction_shape(context)[1] if context is not None
+             else "greys" if n_grey >= 5 else "unidentified")
     return {
         "temporal-drift": f"the {n_white} white references over time, smoothed as far as "
                           "their noise allows",
@@ -163,7 +164,7 @@ def _interaction_term(context: DiagnosisContext, default_exponent: float = DEFAU
     amounts = 1.0 - np.linalg.solve(matrix, white)
     summed = matrix.sum(axis=1)
     amount = float(1.0 - white[1] / summed[1])
-    assumed, basis = interaction_shape(context)
+    assumed, _ = interaction_shape(context)
     exponent = default_exponent if assumed is None else assumed
     greys = partial_greys(context.fit.rgb) & ~context.copies
     drive = context.fit.rgb[greys, 0] / 255.0
