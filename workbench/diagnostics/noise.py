@@ -284,9 +284,14 @@ def _robust_variance(squares: np.ndarray) -> float:
     or a quantization step dominate. Winsorizing at 4σ keeps the tails that
     noise has and caps those it does not.
     """
+    return float(np.mean(_winsorized(squares)))
+
+
+def _winsorized(squares: np.ndarray) -> np.ndarray:
+    """``squares`` capped at 16× their median-based scale (4σ)."""
     squares = np.asarray(squares, dtype=float)
     scale = float(np.median(squares) / _CHI2_1_MEDIAN)
-    return float(np.mean(np.minimum(squares, 16.0 * scale)))
+    return np.minimum(squares, 16.0 * scale)
 
 
 SUCCESSIVE_OVERLAP = 1.5
@@ -304,12 +309,10 @@ def effective_dof(squares: np.ndarray, overlap: float = 1.0) -> float:
     Gaussian's) gets proportionally fewer: an F-test against it then keeps its
     stated false-alarm rate, whatever the noise's tails, without assuming them.
     """
-    squares = np.asarray(squares, dtype=float)
-    n = squares.size
+    kept = _winsorized(squares)
+    n = kept.size
     if n < 2:
         return 1.0
-    scale = float(np.median(squares) / _CHI2_1_MEDIAN)
-    kept = np.minimum(squares, 16.0 * scale)
     mean = float(np.mean(kept))
     dispersion = float(np.var(kept, ddof=1)) / mean ** 2 if mean > 0 else 2.0
     return max(n / overlap * 2.0 / max(dispersion, 2.0), 1.0)
