@@ -38,22 +38,15 @@ def test_a_worker_thread_shows_patches_and_gets_control_back_once_painted(qtbot)
     display = QtPatchDisplay(window, timeout_s=5.0)
     assert isinstance(display, PatchDisplay)
     qtbot.waitExposed(window)
-    errors = []
 
     def worker():
-        try:
-            for rgb in ([255, 0, 0], [10, 200, 30]):
-                paints = window.paint_count
-                display.show(rgb)
-                # painted before show returned (window.rgb is set before the paint, so it proves nothing)
-                assert window.last_painted == rgb and window.paint_count > paints
-        except Exception as error:  # noqa: BLE001 - reported below
-            errors.append(error)
+        for rgb in ([255, 0, 0], [10, 200, 30]):
+            paints = window.paint_count
+            display.show(rgb)
+            # painted before show returned (window.rgb is set before the paint, so it proves nothing)
+            assert window.last_painted == rgb and window.paint_count > paints
 
-    thread = threading.Thread(target=worker)
-    thread.start()
-    qtbot.waitUntil(lambda: not thread.is_alive(), timeout=10_000)
-    assert errors == []
+    assert _run_in_worker(qtbot, worker) == []
     assert _colour_at_centre(window) == [10, 200, 30]
 
 
@@ -88,6 +81,15 @@ def _catch(function, *args):
     return []
 
 
+def _run_in_worker(qtbot, function) -> list:
+    """``function`` on a worker thread while the GUI thread's event loop runs; what it raised."""
+    errors = []
+    thread = threading.Thread(target=lambda: errors.extend(_catch(function)))
+    thread.start()
+    qtbot.waitUntil(lambda: not thread.is_alive(), timeout=10_000)
+    return errors
+
+
 def test_an_unknown_screen_lists_the_screens(qtbot):
     with pytest.raises(InputError, match="no screen 99; choose one of: 0: "):
         PatchWindow(99)
@@ -99,19 +101,12 @@ def test_an_apl_patch_is_a_centred_window_on_its_surround(qtbot):
     qtbot.addWidget(window)
     display = QtPatchDisplay(window, timeout_s=5.0)
     qtbot.waitExposed(window)
-    errors = []
 
     def worker():
-        try:
-            display.show([250, 240, 230], window=0.25, surround=[20, 30, 40])
-            assert window.last_painted_frame == ([250, 240, 230], 0.25, [20, 30, 40])
-        except Exception as error:  # noqa: BLE001 - reported below
-            errors.append(error)
+        display.show([250, 240, 230], window=0.25, surround=[20, 30, 40])
+        assert window.last_painted_frame == ([250, 240, 230], 0.25, [20, 30, 40])
 
-    thread = threading.Thread(target=worker)
-    thread.start()
-    qtbot.waitUntil(lambda: not thread.is_alive(), timeout=10_000)
-    assert errors == []
+    assert _run_in_worker(qtbot, worker) == []
     rect = window.patch_rect()
     area = rect.width() * rect.height() / (window.width() * window.height())
     assert area == pytest.approx(0.25, rel=0.02)
