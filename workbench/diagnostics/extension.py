@@ -164,12 +164,12 @@ def _interaction_term(context: DiagnosisContext, default_exponent: float = DEFAU
     amounts = 1.0 - np.linalg.solve(matrix, white)
     summed = matrix.sum(axis=1)
     amount = float(1.0 - white[1] / summed[1])
-    assumed, _ = interaction_shape(context)
+    assumed, basis = interaction_shape(context)
     exponent = default_exponent if assumed is None else assumed
-    greys = partial_greys(context.fit.rgb) & ~context.copies
-    drive = context.fit.rgb[greys, 0] / 255.0
-    keep = drive > 0.1
-    if keep.sum() >= 5:
+    if basis == "greys":
+        greys = partial_greys(context.fit.rgb) & ~context.copies
+        drive = context.fit.rgb[greys, 0] / 255.0
+        keep = drive > 0.1
         curves = [None if s.drive.size < 2 else
                   fit_tone_curve(*tone_data(s), "spline" if s.drive.size >= 8 else "power")
                   for s in context.sweeps]
