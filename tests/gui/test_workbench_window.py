@@ -273,6 +273,18 @@ def test_the_flow_has_every_page_in_order_and_a_missing_one_says_why(window):
     assert isinstance(page, UnavailablePage) and page.text().startswith("page not available: ")
 
 
+def test_the_plan_list_offers_every_built_in_plan_with_its_patch_count(window):
+    from workbench.measurement.plans import MEASUREMENT_PLANS, measurement_plan
+
+    form = window.pages["calibrate"].form
+    for name in MEASUREMENT_PLANS:
+        assert form.plan.findData(name) >= 0, name
+    form.plan.setCurrentIndex(form.plan.findData("authors-2024"))
+    count = len(measurement_plan("authors-2024", 0))
+    assert f"{count} patches" in form.plan.currentText() and "authors" in form.plan.currentText()
+    assert f"{count} patches" in form.estimate.text()
+
+
 def test_the_log_dock_shows_instrument_traffic_at_debug_on_demand(qtbot, window):
     dock = window.log_dock
     logging.getLogger("instruments.cs2000").debug("-> MEAS,1 (before)")

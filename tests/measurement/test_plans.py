@@ -1,15 +1,18 @@
-"""Measurement plans: the paper's sequence, the quick one, and plan files."""
+"""Measurement plans: the paper's sequence, the quick one, the authors' own, and plan files."""
 
 import pytest
 
+from workbench.cli import main
 from workbench.errors import InputError, SpectrumFileError
 from workbench.measurement.plans import (
+    AUTHORS_2024_LEVELS,
     DRIFT_REFERENCE_INTERVAL,
     MEASUREMENT_PLANS,
     Patch,
     measurement_plan,
     read_plan_file,
 )
+from workbench.session import read_session_csv
 
 
 def _gaps_between_whites(plan):
@@ -66,6 +69,58 @@ def test_quick_plan_has_fewer_levels():
     counts = plan.counts()
     assert counts["ramp-r"] == 5 and counts["validation"] == 10
     assert len(plan) == 28 < len(measurement_plan("paper", seed=1))
+
+
+def test_the_authors_2024_plan_counts_and_kinds():
+    plan = measurement_plan("authors-2024", seed=1)
+    assert plan.name == "authors-2024" and plan.seed == 1
+    assert plan.counts() == {"black": 1, "white": 12, "ramp-r": 51, "ramp-g": 51, "ramp-b": 51,
+                             "grey": 50, "validation": 50}
+    assert len(plan) == 266
+    assert plan.patches[:2] == (Patch("black", (0, 0, 0)), Patch("white", (255, 255, 255)))
+    assert plan.patches[-1] == Patch("white", (255, 255, 255))
+    assert not any(p.is_apl for p in plan.patches)
+    # the order: black, white, red, green, blue, greys, the grey ramp's white, validation
+    kinds = [p.kind for p in plan.patches if p.kind != "white"]
+    assert kinds == ["black"] + ["ramp-r"] * 51 + ["ramp-g"] * 51 + ["ramp-b"] * 51 + ["grey"] * 50 \
+        + ["validation"] * 50
+
+
+def test_the_authors_2024_plan_levels():
+    plan = measurement_plan("authors-2024", seed=1)
+    assert AUTHORS_2024_LEVELS == tuple(range(5, 256, 5))
+    for channel, kind in enumerate(("ramp-r", "ramp-g", "ramp-b")):
+        ramp = [p.rgb for p in plan.patches if p.kind == kind]
+        assert [rgb[channel] for rgb in ramp] == list(range(5, 256, 5))
+        assert all(v == 0 for rgb in ramp for i, v in enumerate(rgb) if i != channel)
+    greys = [p.rgb for p in plan.patches if p.kind == "grey"]
+    assert greys == [(level,) * 3 for level in range(5, 251, 5)]
+    # the grey ramp's 255 level is a white, right after its last grey
+    last_grey = max(i for i, p in enumerate(plan.patches) if p.kind == "grey")
+    assert plan.patches[last_grey + 1] == Patch("white", (255, 255, 255))
+
+
+@pytest.mark.parametrize("seed", [0, 7, 123])
+def test_the_authors_2024_validation_colours_are_the_paper_plans(seed):
+    def validation(name):
+        return [p for p in measurement_plan(name, seed=seed).patches if p.kind == "validation"]
+
+    assert len(validation("authors-2024")) == 50
+    assert validation("authors-2024") == validation("paper")
+
+
+def test_the_authors_2024_plan_is_offered_by_measure(tmp_path, capsys):
+    plan = measurement_plan("authors-2024", seed=4)
+    assert main(["measure", "--simulate", "--plan", "authors-2024", "--seed", "4", "--time-scale", "0",
+                 "--out", str(tmp_path)]) == 0
+    assert capsys.readouterr().out.startswith(
+        f"measure: finished: {len(plan)} of {len(plan)} patches measured, 0 failed")
+    session = read_session_csv(tmp_path / "session.csv")
+    assert list(session.kind) == [p.kind for p in plan.patches]
+    assert session.rgb.tolist() == [list(p.rgb) for p in plan.patches]
+    grey_Y = session.select("grey").XYZ[:, 1]
+    assert (grey_Y[1:] > grey_Y[:-1]).all()  # the ramp rises
+    assert grey_Y[-1] < session.select("white").XYZ[:, 1].min()
 
 
 def test_an_unknown_plan_lists_the_valid_ones():

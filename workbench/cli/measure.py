@@ -4,7 +4,7 @@
 
     vr-workbench measure (--simulate [--effect ID[:MAGNITUDE]]... [--time-scale S] | --port DEVICE|auto)
                          [--display simulated|window[:SCREEN]|tcp:HOST:PORT]
-                         [--plan paper|quick|apl|paper+apl|paper+greys | --plan-file FILE]
+                         [--plan paper|quick|apl|paper+apl|paper+greys|authors-2024 | --plan-file FILE]
                          [--seed N] --out DIR [--resume]
 
 Writes ``DIR/journal.jsonl`` as it goes (one fsynced line per patch), then

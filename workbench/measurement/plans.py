@@ -38,6 +38,17 @@ Built-in plans
     drive, which the paper's plan (whose only mixture is white) cannot; the
     diagnosis fits a channel interaction's shape on the greys and
     cross-validates it on the mixtures. 254 patches.
+``authors-2024``
+    The seed authors' own protocol (their public code,
+    rkl-gilro/ColorCharacterization, ``src/HMD_ColourCharacterisation.m``):
+    black, white, each channel swept from 5 to 255 in steps of 5, a grey ramp
+    (r = g = b, kind ``grey``) from 5 to 250 closed by the white at 255, then
+    the ``paper`` plan's 50 validation colours for the same seed, with the
+    ``paper`` plan's drift references (their protocol measures one white; the
+    diagnosis needs repeated whites to test drift): 266 patches, 77.8 min of
+    modelled CS-2000 time on the clean simulated headset. It is what the
+    authors' grey-ramp linearisation (:mod:`workbench.diagnostics.authors`)
+    is built from, measured as they measure it.
 """
 
 from __future__ import annotations
@@ -61,6 +72,8 @@ __all__ = [
     "measurement_plan_apl",
     "measurement_plan_paper_apl",
     "measurement_plan_paper_greys",
+    "measurement_plan_authors_2024",
+    "AUTHORS_2024_LEVELS",
     "GREY_LEVELS",
     "MIXTURE_LEVELS",
     "Patch",
@@ -91,6 +104,9 @@ GREY_LEVELS = tuple(range(16, 241, 16))
 MIXTURE_LEVELS = (64, 128, 192)
 """Per-channel DAC levels of the ``paper+greys`` plan's partial-drive mixtures (a 3 × 3 × 3
 cube without its 3 greys: 24 mixtures)."""
+
+AUTHORS_2024_LEVELS = tuple(range(5, 256, 5))
+"""DAC levels of the ``authors-2024`` plan's sweeps and grey ramp (their DAC 0 is the black)."""
 
 APL_REFERENCE_INTERVAL = 6
 """The ``apl`` plan shows a full-field white after this many APL patches."""
@@ -288,12 +304,55 @@ def measurement_plan_paper_greys(seed: int) -> MeasurementPlan:
     return MeasurementPlan("paper+greys", _with_drift_references(patches), seed)
 
 
+def measurement_plan_authors_2024(seed: int) -> MeasurementPlan:
+    """The seed authors' own measurement protocol: channel sweeps and a grey ramp every 5 DAC.
+
+    Their public code (rkl-gilro/ColorCharacterization,
+    ``src/HMD_ColourCharacterisation.m``) measures the red, green and blue
+    channels and a grey (r = g = b) at DAC 0, 5, …, 255, one white and a set of
+    random validation colours; the grey ramp carries the tone curves of their
+    model (:mod:`workbench.diagnostics.authors`). Here the four DAC-0 levels
+    are one ``black`` patch, the sweeps (kinds ``ramp-r``, ``ramp-g``,
+    ``ramp-b``) run over :data:`AUTHORS_2024_LEVELS`, the grey ramp (kind
+    ``grey``) over 5..250 and its 255 level is a ``white``, and the validation
+    colours are the ``paper`` plan's for the same seed.
+
+    Their protocol measures a single white; this plan keeps the ``paper``
+    plan's drift references (a white after every
+    :data:`DRIFT_REFERENCE_INTERVAL` patches and at the end), which the
+    diagnosis needs to test ``temporal-drift`` and to correct for it.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the validation colours (the same colours as ``paper`` with this seed).
+
+    Returns
+    -------
+    MeasurementPlan
+        266 patches: 1 black, 3 × 51 ramp levels, 50 greys (5..250), 50
+        validation colours and 12 whites (the first, the grey ramp's 255 and
+        10 drift references, the last of which ends the plan), in the order
+        black, white, red, green, blue, greys, white, validation.
+
+    References
+    ----------
+    Díaz-Barrancas et al. (2020), Sensors 20(19) 5658; code:
+    github.com/rkl-gilro/ColorCharacterization (``src/HMD_ColourCharacterisation.m``).
+    """
+    greys = [Patch("grey", (level,) * 3) for level in AUTHORS_2024_LEVELS if level < 255]
+    patches = [Patch("black", _BLACK), Patch("white", _WHITE), *_ramps(AUTHORS_2024_LEVELS),
+               *greys, Patch("white", _WHITE), *_validation(50, seed)]
+    return MeasurementPlan("authors-2024", _with_drift_references(patches), seed)
+
+
 MEASUREMENT_PLANS = {
     "paper": measurement_plan_paper,
     "quick": measurement_plan_quick,
     "apl": measurement_plan_apl,
     "paper+apl": measurement_plan_paper_apl,
     "paper+greys": measurement_plan_paper_greys,
+    "authors-2024": measurement_plan_authors_2024,
 }
 """Built-in plans by name: each a function of the validation seed."""
 

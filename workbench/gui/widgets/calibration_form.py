@@ -142,7 +142,8 @@ class CalibrationForm(QWidget):
         self.plan = QComboBox()
         for name, make_plan in MEASUREMENT_PLANS.items():
             what = {"paper": ", as in the paper", "paper+greys": ", with greys and mixtures",
-                    "apl": ", windows on surrounds", "paper+apl": ", with the APL block"}
+                    "apl": ", windows on surrounds", "paper+apl": ", with the APL block",
+                    "authors-2024": ", the authors' own protocol with a grey ramp"}
             self.plan.addItem(f"{name} ({len(make_plan(0))} patches{what.get(name, '')})", name)
         self.plan.addItem("from a file…", "file")
         form.addRow("plan", self.plan)
