@@ -201,11 +201,12 @@ def test_a_singular_extended_model_is_refused(tmp_path):
 
 
 def test_schema_components_follow_the_diagnostics_terms():
+    from workbench.diagnostics.authors import GREY_RAMP_COMPONENT
     from workbench.diagnostics.extension import TERMS
 
     schema = json.loads(SCHEMA_PATH.read_text())
     names = schema["$defs"]["parameters-extended"]["properties"]["components"]["items"]["enum"]
-    assert sorted(names) == sorted(TERMS)
+    assert sorted(names) == sorted([*TERMS, GREY_RAMP_COMPONENT])
 
 
 def test_shipped_simulated_profile_is_an_extended_model_with_its_effects():

@@ -38,7 +38,8 @@ from workbench.diagnostics.extension import fit_extended
 from workbench.display import GammaMatrixDisplay
 from workbench.errors import InputError
 
-__all__ = ["FOLDS", "CV_Z", "NOISE_TESTED_TERMS", "fold_of_rows", "cross_validated_errors", "cross_validated_dE00",
+__all__ = ["FOLDS", "CV_Z", "NOISE_TESTED_TERMS", "fold_of_rows", "cross_validated_errors",
+           "cross_validated_errors_of", "cross_validated_dE00", "group_mean",
            "paired_gain", "select_terms"]
 
 FOLDS = 5
@@ -75,18 +76,20 @@ def fold_of_rows(context: DiagnosisContext, folds: int = FOLDS) -> np.ndarray:
     return fold
 
 
-def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, tone_forms=None,
-                           folds: int = FOLDS) -> tuple[np.ndarray, np.ndarray] | None:
-    """Per-row ΔE00 of the fit rows predicted by models fitted without them, and each row's group.
+def cross_validated_errors_of(context: DiagnosisContext, fit_model, drift: bool = False,
+                              folds: int = FOLDS) -> tuple[np.ndarray, np.ndarray] | None:
+    """Per-row ΔE00 of the fit rows predicted by ``fit_model`` fitted without them, and groups.
 
-    ``effects`` None: the baseline. Rows come in the same order for every
+    ``fit_model(fold_context, fold_baseline)`` returns a display model from a
+    fold's training rows (``fold_context`` built with the drift correction
+    when ``drift``; the fold's predictions are then multiplied by its drift
+    gain at the held-out rows' times). Rows come in the same order for every
     model of one context, so two results can be compared row by row. None
     where a fold's model cannot be fitted.
     """
     session = context.raw
     fold = fold_of_rows(context, folds)
     errors, groups = [], []
-    drift = effects is not None and "temporal-drift" in effects
     for k in range(folds):
         test = fold == k
         if not test.any():
@@ -95,15 +98,11 @@ def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, to
         held = session.subset(test)
         try:
             fold_baseline = GammaMatrixDisplay.fit(train)
-            if effects is None:
-                predicted = fold_baseline.forward(held.rgb)
-            else:
-                fold_context = build_context(train, drift_found=drift, noise=context.noise)
-                model = fit_extended(fold_context, effects,
-                                     fold_baseline if baseline is not None else None, tone_forms)
-                predicted = model.forward(held.rgb)
-                if drift and fold_context.drift is not None:
-                    predicted = predicted * fold_context.drift.gain(held.t_s)[:, None]
+            fold_context = build_context(train, drift_found=drift, noise=context.noise)
+            model = fit_model(fold_context, fold_baseline)
+            predicted = model.forward(held.rgb)
+            if drift and fold_context.drift is not None:
+                predicted = predicted * fold_context.drift.gain(held.t_s)[:, None]
         except (InputError, np.linalg.LinAlgError, ValueError):
             return None
         errors.append(delta_E2000(predicted, held.XYZ, context.white))
@@ -113,7 +112,23 @@ def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, to
     return np.concatenate(errors), np.concatenate(groups)
 
 
-def _group_mean(values: np.ndarray, groups: np.ndarray) -> float:
+def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, tone_forms=None,
+                           folds: int = FOLDS) -> tuple[np.ndarray, np.ndarray] | None:
+    """Per-row ΔE00 of the fit rows predicted by models fitted without them, and each row's group.
+
+    ``effects`` None: the baseline. Otherwise the extension with the terms of
+    ``effects`` (:func:`cross_validated_errors_of`).
+    """
+    if effects is None:
+        return cross_validated_errors_of(context, lambda fold_context, fold_baseline: fold_baseline,
+                                         folds=folds)
+    return cross_validated_errors_of(
+        context, lambda fold_context, fold_baseline: fit_extended(
+            fold_context, effects, fold_baseline if baseline is not None else None, tone_forms),
+        drift="temporal-drift" in effects, folds=folds)
+
+
+def group_mean(values: np.ndarray, groups: np.ndarray) -> float:
     return float(np.mean([values[groups == g].mean() for g in np.unique(groups)]))
 
 
@@ -121,7 +136,7 @@ def cross_validated_dE00(context: DiagnosisContext, effects, baseline=None, tone
                          folds: int = FOLDS) -> float:
     """Mean ΔE00 of the fit rows predicted by models fitted without them (``effects`` None: baseline)."""
     result = cross_validated_errors(context, effects, baseline, tone_forms, folds)
-    return float("inf") if result is None else _group_mean(*result)
+    return float("inf") if result is None else group_mean(*result)
 
 
 def paired_gain(worse, better) -> tuple[float, float]:
@@ -171,17 +186,17 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
         tone_forms = tuple(curve.form for curve in full.tone)
     record["tone_forms"] = tone_forms
     base = cross_validated_errors(context, None)
-    base_error = float("inf") if base is None else _group_mean(*base)
+    base_error = float("inf") if base is None else group_mean(*base)
     record["baseline_cv_mean_dE00"] = base_error
     current = list(found)
     errors = cross_validated_errors(context, current, baseline, tone_forms)
-    error = float("inf") if errors is None else _group_mean(*errors)
+    error = float("inf") if errors is None else group_mean(*errors)
     record["steps"].append({"terms": list(current), "cv_mean_dE00": error})
     order = sorted(found, key=lambda e: (impacts or {}).get(e, 0.0))
     for effect in order:
         trial = [e for e in current if e != effect]
         trial_errors = cross_validated_errors(context, trial, baseline, tone_forms)
-        trial_error = float("inf") if trial_errors is None else _group_mean(*trial_errors)
+        trial_error = float("inf") if trial_errors is None else group_mean(*trial_errors)
         gain, standard_error = paired_gain(trial_errors, errors)
         needed = CV_Z * standard_error if effect in NOISE_TESTED_TERMS else 0.0
         if not gain > needed:

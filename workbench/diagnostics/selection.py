@@ -41,7 +41,13 @@ from workbench.diagnostics.detectors import (
     run_detectors,
     family_size,
 )
-from workbench.diagnostics.cross_validation import select_terms
+from workbench.diagnostics.cross_validation import cross_validated_dE00, select_terms
+from workbench.diagnostics.model_choice import (
+    GREY_RAMP_CANDIDATES,
+    ModelChoice,
+    choose_model,
+    fit_candidate,
+)
 from workbench.diagnostics.extension import (
     MATERIALITY_INTERACTION_EXPONENT,
     PARAMETRIC_TONE_FORMS,
@@ -108,6 +114,7 @@ class Diagnosis:
     unexplained: DetectorResult | None = None
     cross_validation: dict = field(default_factory=dict)
     apl: AplDiagnosis | None = None
+    model_choice: ModelChoice | None = None
 
     @property
     def apl_curve(self):
@@ -195,6 +202,7 @@ class Diagnosis:
                          "terms": [_term_json(r.effect, self) for r in self.findings
                                    if r.in_model],
                          "validation": None if ext is None else ext.to_json()},
+            "model_choice": None if self.model_choice is None else self.model_choice.to_json(),
             "gain": {"mean_dE00_reduction_pct": self.gain_pct},
             "attribution": self._attribution_json(),
             "fallback": None if self.fallback_dE is None else {
@@ -333,16 +341,29 @@ def diagnose(session: Session) -> Diagnosis:
                                 load_session=load_session)
     extended = (fit_extended(context, terms, baseline, tone_forms)
                 if cross_validation.get("use_extension") else baseline)
+    choice = _choose_model(context, extended is not baseline, terms, cross_validation)
+    by_effect = dict(cross_validation["by_effect"])
+    if choice.chosen in GREY_RAMP_CANDIDATES:
+        drift_in = "temporal-drift" in terms and extended is not baseline
+        extended = fit_candidate(choice.chosen, context)
+        answered = _answered_by(choice.chosen) | ({"temporal-drift"} if drift_in else set())
+        terms = [r.effect for r in results if r.found and r.effect in answered]
+        for effect in [r.effect for r in results if r.found and r.effect != APL_EFFECT]:
+            by_effect[effect] = (f"in the model through the {choice.chosen} model: {choice.reason}"
+                                 if effect in answered else
+                                 f"not in the exported model: {choice.reason}")
+    in_model_of = (lambda effect: effect in terms and extended is not baseline)
     results = tuple(r if r.effect == APL_EFFECT else
-                    replace(r, in_model=r.effect in terms and extended is not baseline,
-                            cross_validation=cross_validation["by_effect"].get(r.effect, ""))
+                    replace(r, in_model=in_model_of(r.effect),
+                            cross_validation=by_effect.get(r.effect, ""))
                     for r in results)
     white = session_full.white_XYZ if session_full.has_white else context.white
     in_model = [t for t in terms if extended is not baseline]
     if len(validation):
         baseline_dE = delta_E2000(baseline.forward(validation.rgb), validation.XYZ, white)
         extended_dE = _score_extended(extended, context, in_model, validation, white)
-        attribution = _attribution(context, in_model, baseline, validation, white, tone_forms)
+        attribution = (None if choice.chosen in GREY_RAMP_CANDIDATES else
+                       _attribution(context, in_model, baseline, validation, white, tone_forms))
     else:
         baseline_dE = extended_dE = np.zeros(0)
         attribution = None
@@ -355,7 +376,25 @@ def diagnose(session: Session) -> Diagnosis:
                      extended_dE=np.atleast_1d(extended_dE), protocol="holdout",
                      fallback_dE=fallback_dE, fallback_model=fallback_model,
                      fallback_protocol=fallback_protocol, attribution=attribution,
-                     unexplained=unexplained, cross_validation=cross_validation, apl=apl)
+                     unexplained=unexplained, cross_validation=cross_validation, apl=apl,
+                     model_choice=choice)
+
+
+def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation
+                  ) -> ModelChoice:
+    """:func:`~workbench.diagnostics.model_choice.choose_model` with term selection's scores."""
+    cv_baseline = cross_validation.get("baseline_cv_mean_dE00")
+    if cv_baseline is None:
+        cv_baseline = cross_validated_dE00(context, None)
+    cv_extension = cross_validation.get("extension_cv_mean_dE00", float("inf"))
+    return choose_model(context, "extension" if extension_used else "baseline", cv_extension,
+                        cv_baseline, drift="temporal-drift" in terms and extension_used)
+
+
+def _answered_by(candidate: str) -> set:
+    """Named effects a grey-ramp candidate models (its black, its flexible curves, its blend)."""
+    answered = {"black-offset", "tone-curve-shape"}
+    return answered | ({"channel-interaction"} if candidate == "grey-ramp+sweeps" else set())
 
 
 def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None

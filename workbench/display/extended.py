@@ -17,6 +17,13 @@
   the sweeps are untouched and the white fixes ``a_c`` exactly in X, Y and Z
   (a chromatic non-additivity: crosstalk, an LCD's dynamic-contrast
   backlight, ``a_c < 0``); ``p`` is chosen on greys where the session has them.
+  *Sweeps against the grey ramp* (``axis_ratio`` set; the tone curves then come
+  from the grey ramp, as in the seed authors' linearisation): channel ``c``'s
+  light is scaled by ``s_c = 1 + (r_c(L_c) − 1)(1 − w_c)``, ``r_c`` the ratio of
+  the channel's own sweep to its grey-ramp curve at the same output (measured
+  at the sweep levels, interpolated linearly), ``w_c = clip(mean_{o≠c} L_o / L_c,
+  0, 1)`` how grey the colour is from channel ``c``'s side: 1 on the greys
+  (the grey ramp exactly), 0 on the channel's own axis (its sweep exactly).
   *Load knee* (legacy, ``amounts`` None): one gain
   ``s = 1 − a · clip((load − knee)/(1 − knee), 0, 1)``, ``load`` the mean of the
   ``L_c`` (OLED power limiting); ``a < 0`` is super-additivity.
@@ -77,6 +84,8 @@ class ChannelInteraction:
     knee: float = 1.0 / 3.0
     amounts: tuple | None = None
     exponent: float = 2.0
+    axis_ratio: tuple | None = None
+    """Per channel (outputs, ratios): the sweep-to-grey-ramp ratio ``r_c`` at grey-ramp outputs."""
 
     def gain(self, load: np.ndarray) -> np.ndarray:
         """Legacy form: the one gain at mean load ``load``."""
@@ -86,12 +95,26 @@ class ChannelInteraction:
     def channel_gains(self, output: np.ndarray) -> np.ndarray:
         """Gain (..., 3) of each channel's light at channel outputs ``output`` (..., 3)."""
         output = np.clip(output, 0.0, 1.0)
+        if self.axis_ratio is not None:
+            gains = np.ones(output.shape)
+            for c, (levels, ratios) in enumerate(self.axis_ratio):
+                own = output[..., c]
+                others = (output.sum(axis=-1) - own) / 2.0
+                greyness = np.clip(others / np.maximum(own, 1e-12), 0.0, 1.0)
+                ratio = np.interp(own, levels, ratios)
+                gains[..., c] = 1.0 + (ratio - 1.0) * (1.0 - greyness)
+            return gains
         if self.amounts is None:
             return np.repeat(self.gain(output.mean(axis=-1))[..., None], 3, axis=-1)
         codrive = (output.sum(axis=-1) - output.max(axis=-1)) / 2.0
         return 1.0 - np.asarray(self.amounts) * (codrive ** self.exponent)[..., None]
 
     def to_json(self) -> dict:
+        if self.axis_ratio is not None:
+            return {"amount": self.amount,
+                    "axis_ratio": [{"output": [float(v) for v in levels],
+                                    "ratio": [float(v) for v in ratios]}
+                                   for levels, ratios in self.axis_ratio]}
         if self.amounts is None:
             return {"amount": self.amount, "knee": self.knee}
         return {"amount": self.amount, "amounts": [float(a) for a in self.amounts],
@@ -201,7 +224,10 @@ class ExtendedDisplay(DisplayModel):
                 tuple(tuple(r) for r in t)) for t in parameters["chromaticity"]),
             interaction=None if interaction is None else ChannelInteraction(**{
                 **interaction, **({"amounts": tuple(interaction["amounts"])}
-                                  if interaction.get("amounts") is not None else {})}),
+                                  if interaction.get("amounts") is not None else {}),
+                **({"axis_ratio": tuple((tuple(r["output"]), tuple(r["ratio"]))
+                                        for r in interaction["axis_ratio"])}
+                   if interaction.get("axis_ratio") is not None else {})}),
             components=tuple(parameters.get("components", ())),
         )
 

@@ -14,6 +14,9 @@ Forms
                     (shoulder or S-shaped departures).
 ``spline``          monotone piecewise-cubic (PCHIP) through the measured points after
                     isotonic regression: the 1D LUT from the sweeps.
+``linear``          the same points joined by straight lines (the seed authors' grey-ramp
+                    linearisation interpolates this way; PCHIP overshoots between two
+                    nearly coincident levels, which real charts hold).
 
 References
 ----------
@@ -38,6 +41,7 @@ __all__ = [
     "GOGCurve",
     "ExtendedPowerCurve",
     "SplineCurve",
+    "LinearCurve",
     "TONE_CURVES",
     "fit_tone_curve",
     "tone_curve_from_parameters",
@@ -276,7 +280,31 @@ class SplineCurve(ToneCurve):
         return cls(tuple(d), tuple(np.maximum.accumulate(L)))
 
 
-TONE_CURVES = {cls.form: cls for cls in (PowerCurve, GOGCurve, ExtendedPowerCurve, SplineCurve)}
+@dataclass(frozen=True, eq=False)
+class LinearCurve(SplineCurve):
+    """Monotone piecewise-linear through (0, 0), the isotonic-regressed points, and (1, 1)."""
+
+    form = "linear"
+
+    def __post_init__(self):
+        super().__post_init__()
+        d = np.asarray(self.drive_points, dtype=float)
+        L = np.asarray(self.output_points, dtype=float)
+        object.__setattr__(self, "_forward", lambda x: np.interp(x, d, L))
+
+    STRICT_SLOPE = 1e-4
+    """Added to the slope (then rescaled to end at 1) so a flat stretch still inverts uniquely."""
+
+    @classmethod
+    def fit(cls, drive, output):
+        flat = SplineCurve.fit(drive, output)
+        d = np.asarray(flat.drive_points)
+        L = (np.asarray(flat.output_points) + cls.STRICT_SLOPE * d) / (1.0 + cls.STRICT_SLOPE)
+        return cls(tuple(d), tuple(L))
+
+
+TONE_CURVES = {cls.form: cls for cls in (PowerCurve, GOGCurve, ExtendedPowerCurve, SplineCurve,
+                                         LinearCurve)}
 
 
 def _check(drive, output):

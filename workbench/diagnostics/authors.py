@@ -1,0 +1,246 @@
+"""The second peer: the seed authors' own current characterization method.
+
+Díaz-Barrancas, Gil-Rodríguez et al. publish their current HMD
+characterization code (rkl-gilro/ColorCharacterization, 2025,
+``src/HMD_ColourCharacterisation.m``). In the workbench's terms it is:
+
+1. the black ``K`` is the mean of the DAC-0 measurements;
+2. the matrix ``M`` has the full-drive primaries less ``K`` as columns;
+3. each grey ``g`` of the grey ramp gives three "radiometric" channel values
+   ``ρ(g) = M⁻¹ (XYZ(g) − K)``;
+4. a colour ``(r, g, b)`` is predicted as ``XYZ = M · [ρ_r(r), ρ_g(g), ρ_b(b)] + K``,
+   each ``ρ_c`` interpolated linearly between the measured grey levels.
+
+The single-channel sweeps are not used beyond their full-drive point: the
+grey ramp carries the tone curves, so whatever the channels do to each other
+along the grey axis (crosstalk, a backlight that follows the picture) is
+inside the curves. :func:`fit_grey_ramp_linearisation` is that method, exactly
+(linear interpolation, no smoothing); :func:`score_authors_method` fits it on
+a session's fit rows and scores it on the validation rows with the
+convention of :func:`workbench.diagnostics.diagnose` (CIEDE2000, CIELAB white
+the measured display white), beside ArgyllCMS in the benchmarks and the
+real-data table. :func:`grey_ramp_model` is the same method as an exportable
+:class:`~workbench.display.extended.ExtendedDisplay` (monotone curves through
+the same points), one of the candidates the diagnosis chooses among.
+
+References
+----------
+Díaz-Barrancas, F., Cwierz, H., Pardo, P. J., Pérez, Á. L., Suero, M. I.
+(2020). Spectral Color Management in Virtual Reality Scenes. Sensors 20(19),
+5658. Code: github.com/rkl-gilro/ColorCharacterization (2025).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from workbench.colorimetry import delta_E2000
+from workbench.display.extended import ChannelInteraction, ExtendedDisplay
+from workbench.display.tone_curves import fit_tone_curve
+from workbench.errors import InputError
+from workbench.session import Session
+
+__all__ = ["AUTHORS_METHOD", "GREY_RAMP_COMPONENT", "MIN_GREYS", "GreyRampLinearisation", "AuthorsScore",
+           "grey_ramp_points", "fit_grey_ramp_linearisation", "grey_ramp_model",
+           "score_authors_method"]
+
+AUTHORS_METHOD = "authors' grey-ramp linearisation (Díaz-Barrancas et al., 2025 code)"
+
+GREY_RAMP_COMPONENT = "grey-ramp-linearisation"
+"""The component id a grey-ramp model carries in a profile (beside the effect ids)."""
+
+MIN_GREYS = 3
+"""Grey levels strictly between black and white the method needs (fewer: it is not applicable)."""
+
+
+@dataclass(frozen=True)
+class GreyRampPoints:
+    """The measured quantities the method is built from."""
+
+    black: np.ndarray  # (3,) XYZ
+    matrix: np.ndarray  # (3, 3) columns: full-drive primaries less black
+    drive: np.ndarray  # (n,) grey levels 0..1, 0 and 1 included, rising
+    radiometric: np.ndarray  # (n, 3) ρ at each level
+
+
+def _mean_by_level(drive: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    levels, inverse = np.unique(drive, return_inverse=True)
+    sums = np.zeros((levels.size, values.shape[1]))
+    np.add.at(sums, inverse, values)
+    return levels, sums / np.bincount(inverse)[:, None]
+
+
+def grey_ramp_points(session: Session) -> GreyRampPoints:
+    """Black, matrix and the grey ramp's radiometric values of ``session``'s non-validation rows.
+
+    Raises
+    ------
+    InputError
+        Naming what is missing: a black, a full-drive primary, or
+        :data:`MIN_GREYS` grey levels between black and white.
+    """
+    rows = session.without("validation")
+    rgb, XYZ = rows.rgb, rows.XYZ
+    dark = np.all(rgb == 0, axis=1)
+    if not dark.any():
+        raise InputError(f"{AUTHORS_METHOD} needs a black (0, 0, 0) measurement; "
+                         f"{session.source!r} has none")
+    black = XYZ[dark].mean(axis=0)
+    columns = []
+    for c, name in enumerate("RGB"):
+        others = np.delete(rgb, c, axis=1)
+        full = (rgb[:, c] >= 255) & np.all(others == 0, axis=1)
+        if not full.any():
+            raise InputError(f"{AUTHORS_METHOD} needs the full-drive {name} primary; "
+                             f"{session.source!r} has none")
+        columns.append(XYZ[full].mean(axis=0) - black)
+    matrix = np.column_stack(columns)
+    grey = (rgb[:, 0] == rgb[:, 1]) & (rgb[:, 1] == rgb[:, 2])
+    partial = grey & (rgb[:, 0] > 0) & (rgb[:, 0] < 255)
+    if np.unique(rgb[partial, 0]).size < MIN_GREYS:
+        raise InputError(f"{AUTHORS_METHOD} needs a grey ramp (at least {MIN_GREYS} grey levels "
+                         f"between black and white); {session.source!r} has "
+                         f"{np.unique(rgb[partial, 0]).size}: measure plan 'authors-2024' or "
+                         "'paper+greys'")
+    drive = rgb[grey, 0] / 255.0
+    radiometric = np.linalg.solve(matrix, (XYZ[grey] - black).T).T
+    levels, means = _mean_by_level(drive, radiometric)
+    if levels[0] > 0:
+        levels, means = np.concatenate([[0.0], levels]), np.vstack([np.zeros(3), means])
+    if levels[-1] < 1:  # no white: the primaries at full drive add up to ρ = 1
+        levels, means = np.concatenate([levels, [1.0]]), np.vstack([means, np.ones(3)])
+    return GreyRampPoints(black=black, matrix=matrix, drive=levels, radiometric=means)
+
+
+@dataclass(frozen=True, eq=False)
+class GreyRampLinearisation:
+    """The authors' model, exactly: linear interpolation of ρ between grey levels (module doc)."""
+
+    points: GreyRampPoints
+
+    def linear(self, rgb) -> np.ndarray:
+        d = np.asarray(rgb, dtype=float).reshape(-1, 3) / 255.0
+        p = self.points
+        return np.column_stack([np.interp(d[:, c], p.drive, p.radiometric[:, c])
+                                for c in range(3)])
+
+    def forward(self, rgb) -> np.ndarray:
+        return self.linear(rgb) @ self.points.matrix.T + self.points.black
+
+    def describe(self) -> str:
+        return f"{AUTHORS_METHOD}, {self.points.drive.size} grey levels"
+
+
+def fit_grey_ramp_linearisation(session: Session) -> GreyRampLinearisation:
+    """The authors' method fitted on ``session``'s non-validation rows (module doc)."""
+    return GreyRampLinearisation(grey_ramp_points(session))
+
+
+def grey_ramp_model(session: Session, white: np.ndarray | None = None,
+                    with_sweeps: bool = False) -> ExtendedDisplay:
+    """The authors' method as an exportable display model; ``with_sweeps``: its extension.
+
+    Each channel's ``ρ_c`` is normalized by its value at full drive (so the
+    primaries become ``ρ_c(1) · (P_c − K)``: their sum is the measured white)
+    and made a monotone curve through the grey levels
+    (:class:`~workbench.display.tone_curves.LinearCurve`: isotonic, joined by
+    straight lines), so the model has the inverse every display model needs.
+
+    ``with_sweeps``: the single-channel sweeps, which the authors' method
+    leaves unused below full drive, correct each channel as a colour leaves
+    the grey axis (:class:`~workbench.display.extended.ChannelInteraction`
+    with ``axis_ratio``): the model then reproduces the greys and the sweeps,
+    and a colour between them by how grey it is. Where a channel's sweep and
+    its grey-ramp curve agree the correction is 1 and the model is the
+    authors'.
+
+    Components: ``black-offset`` (the method always has the black),
+    ``grey-ramp-linearisation`` and, with the sweeps, ``channel-interaction``.
+    """
+    p = grey_ramp_points(session)
+    top = p.radiometric[-1]
+    if np.any(top <= 0):
+        raise InputError(f"{AUTHORS_METHOD}: the white solves to a non-positive amount of a "
+                         f"primary ({np.round(top, 3).tolist()}); the grey ramp and the primaries "
+                         "disagree")
+    full = p.matrix * top[None, :]
+    x = full[0] / full.sum(axis=0)
+    y = full[1] / full.sum(axis=0)
+    inner = (p.drive > 0) & (p.drive < 1)
+    tone = tuple(fit_tone_curve(p.drive[inner], p.radiometric[inner, c] / top[c], "linear")
+                 for c in range(3))
+    white = p.black + full.sum(axis=1) if white is None else np.asarray(white, dtype=float)
+    interaction = _axis_ratio(session, p, tone) if with_sweeps else None
+    components = ("black-offset", GREY_RAMP_COMPONENT) + (
+        ("channel-interaction",) if interaction is not None else ())
+    return ExtendedDisplay(black=p.black, white=white, primaries_xy=np.column_stack([x, y]),
+                           primaries_Y=full[1], tone=tone, interaction=interaction,
+                           components=components)
+
+
+AXIS_RATIO_FLOOR = 0.005
+"""Sweep levels whose grey-ramp output is below this (of full drive) give no ratio: too dark to
+divide by."""
+
+
+def _axis_ratio(session: Session, points: GreyRampPoints, tone) -> ChannelInteraction | None:
+    """Each channel's sweep over its grey-ramp curve at the sweep levels (None: no sweep)."""
+    rows = session.without("validation")
+    rgb = rows.rgb
+    top = points.radiometric[-1]
+    table = []
+    for c in range(3):
+        own = (rgb[:, c] > 0) & np.all(np.delete(rgb, c, axis=1) == 0, axis=1)
+        if not own.any():
+            return None
+        drive = rgb[own, c] / 255.0
+        measured = np.linalg.solve(points.matrix, (rows.XYZ[own] - points.black).T).T[:, c]
+        levels, means = _mean_by_level(drive, measured[:, None])
+        curve = tone[c].forward(levels)
+        keep = curve > AXIS_RATIO_FLOOR
+        if not keep.any():
+            return None
+        ratio = np.clip(means[keep, 0] / (top[c] * curve[keep]), 1e-3, 10.0)
+        output, index = np.unique(curve[keep], return_inverse=True)
+        ratio = np.bincount(index, weights=ratio) / np.bincount(index)
+        table.append((tuple(float(v) for v in output), tuple(float(v) for v in ratio)))
+    white_loss = float(1.0 - 1.0 / np.average(1.0 / np.array([t[1][-1] for t in table]),
+                                              weights=points.matrix[1]))
+    return ChannelInteraction(amount=float(np.clip(white_loss, -0.95, 0.95)),
+                              axis_ratio=tuple(table))
+
+
+@dataclass(frozen=True)
+class AuthorsScore:
+    """The authors' method scored on the validation colours (``unavailable``: why not)."""
+
+    model: str
+    n: int = 0
+    mean_dE00: float | None = None
+    p95_dE00: float | None = None
+    max_dE00: float | None = None
+    unavailable: str = ""
+
+    def to_json(self) -> dict:
+        return {"model": self.model, "n": self.n, "mean_dE00": self.mean_dE00,
+                "p95_dE00": self.p95_dE00, "max_dE00": self.max_dE00,
+                "unavailable": self.unavailable or None}
+
+
+def score_authors_method(session: Session) -> AuthorsScore:
+    """The authors' method on ``session``'s fit rows, scored on its validation rows."""
+    validation = session.select("validation")
+    if len(validation) == 0:
+        return AuthorsScore(AUTHORS_METHOD, unavailable="no validation colours to score on")
+    if not session.has_white:
+        return AuthorsScore(AUTHORS_METHOD, unavailable="no white measured")
+    try:
+        model = fit_grey_ramp_linearisation(session)
+    except InputError as error:
+        return AuthorsScore(AUTHORS_METHOD, unavailable=str(error))
+    dE = np.atleast_1d(delta_E2000(model.forward(validation.rgb), validation.XYZ,
+                                   session.white_XYZ))
+    return AuthorsScore(model.describe(), n=int(dE.size), mean_dE00=float(dE.mean()),
+                        p95_dE00=float(np.percentile(dE, 95)), max_dE00=float(dE.max()))

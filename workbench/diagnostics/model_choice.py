@@ -1,0 +1,125 @@
+"""Which model the profile exports: the best model of the fit rows by cross-validation.
+
+A named effect that passes its test gives the extension its terms
+(:mod:`workbench.diagnostics.cross_validation`); but a session can hold more
+than the named terms use. A grey ramp, in particular, measures how the
+channels combine along the grey axis whether or not any named effect passed
+its test, and the seed authors' own method (:mod:`workbench.diagnostics.authors`)
+builds the whole model from it. So the exported model is chosen among
+:data:`MODEL_CANDIDATES` by the same K-fold cross-validation of the fit rows
+(same folds, same per-group mean ΔE00; the validation rows are never read):
+
+``baseline``           the paper's gamma + 3×3;
+``extension``          the extension with the terms selection kept (where it has any);
+``grey-ramp``          the authors' grey-ramp linearisation, exportable;
+``grey-ramp+sweeps``   the same, corrected toward each channel's own sweep as a colour
+                       leaves the grey axis (it reproduces greys and sweeps both).
+
+The grey-ramp candidates exist where the fit rows hold at least
+:data:`~workbench.diagnostics.authors.MIN_GREYS` grey levels. Where
+``temporal-drift`` is in the model they are fitted on the drift-corrected
+rows and their predictions carry the drift gain, as the extension's do.
+The candidate with the lowest cross-validated error is exported; ties keep
+the earlier (simpler) one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from workbench.diagnostics.authors import MIN_GREYS, grey_ramp_model
+from workbench.diagnostics.cross_validation import cross_validated_errors_of, group_mean
+from workbench.diagnostics.detectors import DiagnosisContext
+from workbench.diagnostics.evidence import partial_greys
+from workbench.display import DisplayModel
+from workbench.errors import InputError
+
+__all__ = ["MODEL_CANDIDATES", "GREY_RAMP_CANDIDATES", "ModelChoice", "choose_model",
+           "fit_candidate", "has_grey_ramp"]
+
+MODEL_CANDIDATES = {
+    "baseline": "the paper's gamma + 3×3",
+    "extension": "the extension with the terms that passed cross-validation",
+    "grey-ramp": "the grey ramp's tone curves through the full-drive primaries (the seed "
+                 "authors' method)",
+    "grey-ramp+sweeps": "the grey ramp's tone curves, corrected toward each channel's sweep as a "
+                        "colour leaves the grey axis",
+}
+"""Candidate id → what it is."""
+
+GREY_RAMP_CANDIDATES = ("grey-ramp", "grey-ramp+sweeps")
+
+
+def has_grey_ramp(context: DiagnosisContext) -> bool:
+    """Whether the fit rows hold :data:`~workbench.diagnostics.authors.MIN_GREYS` grey levels."""
+    rgb = context.raw.rgb
+    return np.unique(rgb[partial_greys(rgb), 0]).size >= MIN_GREYS
+
+
+def fit_candidate(name: str, context: DiagnosisContext) -> DisplayModel:
+    """A grey-ramp candidate fitted on ``context``'s fit rows (drift-corrected where they are)."""
+    if name not in GREY_RAMP_CANDIDATES:
+        raise InputError(f"unknown grey-ramp candidate {name!r}; use one of "
+                         f"{', '.join(GREY_RAMP_CANDIDATES)}")
+    return grey_ramp_model(context.fit, context.white, with_sweeps=name == "grey-ramp+sweeps")
+
+
+@dataclass(frozen=True)
+class ModelChoice:
+    """The exported model's candidate id, every candidate's cross-validated error, and why.
+
+    ``cv_mean_dE00`` maps candidate id → cross-validated mean ΔE00 of the fit
+    rows (inf where a fold could not be fitted, absent where not applicable).
+    """
+
+    chosen: str
+    cv_mean_dE00: dict = field(default_factory=dict)
+    reason: str = ""
+
+    def to_json(self) -> dict:
+        return {"chosen": self.chosen, "description": MODEL_CANDIDATES[self.chosen],
+                "cv_mean_dE00": {k: (v if np.isfinite(v) else None)
+                                 for k, v in self.cv_mean_dE00.items()},
+                "reason": self.reason, "candidates": dict(MODEL_CANDIDATES)}
+
+
+def choose_model(context: DiagnosisContext, current: str, cv_current: float,
+                 cv_baseline: float, drift: bool) -> ModelChoice:
+    """The candidate of :data:`MODEL_CANDIDATES` with the lowest cross-validated error.
+
+    Parameters
+    ----------
+    context : DiagnosisContext
+        Drift-corrected where ``drift``.
+    current : str
+        ``"extension"`` or ``"baseline"``: what term selection chose.
+    cv_current, cv_baseline : float
+        Their cross-validated mean ΔE00 (from term selection: same folds).
+    drift : bool
+        Whether ``temporal-drift`` is in the model.
+    """
+    scores = {"baseline": cv_baseline}
+    if current == "extension":
+        scores["extension"] = cv_current
+    if has_grey_ramp(context):
+        for name in GREY_RAMP_CANDIDATES:
+            errors = cross_validated_errors_of(
+                context, lambda fold_context, _baseline, name=name: fit_candidate(name, fold_context),
+                drift=drift)
+            scores[name] = float("inf") if errors is None else group_mean(*errors)
+    finite = {k: v for k, v in scores.items() if np.isfinite(v)}
+    if not finite:
+        return ModelChoice(current, scores, "no candidate could be cross-validated (a fold "
+                           "could not be fitted); the term selection's model is kept")
+    chosen = min(finite, key=lambda k: (finite[k], list(MODEL_CANDIDATES).index(k)))
+    listed = ", ".join(f"{k} {v:.3f}" if np.isfinite(v) else f"{k} could not be fitted in a fold"
+                       for k, v in scores.items())
+    if chosen == current:
+        reason = f"{chosen} predicts unseen fit rows best (cross-validated mean ΔE00: {listed})"
+    else:
+        reason = (f"{chosen} predicts unseen fit rows better than the {current} "
+                  f"({finite[chosen]:.3f} against {scores[current]:.3f} cross-validated mean "
+                  f"ΔE00; all: {listed})")
+    return ModelChoice(chosen, scores, reason)
