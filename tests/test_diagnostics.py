@@ -286,3 +286,27 @@ def test_an_interaction_of_another_form_is_still_named_with_a_gain(seed):
     if "tone-curve-shape" in named:
         assert named["tone-curve-shape"].evidence.startswith("the green sweep")
     assert diagnosis.gain_pct >= 30
+
+
+@needs_real_data
+@pytest.mark.parametrize("name", ["dell-up2516d-displaycal.ti3",
+                                  "lcd-ti3/KOIOS_K2418U_2019-04-01_1518_i1d3_417p.ti3"])
+def test_sparse_chart_cross_validates_and_keeps_up_with_the_authors_method(name):
+    """Two ramp levels per channel and seven greys: every fold can be fitted (no inf), and the
+    exported model is no worse than the seed authors' grey-ramp method on the held-out colours."""
+    session = read_session(REAL / name)
+    rgb, single = session.rgb, (session.rgb > 0).sum(axis=1) == 1
+    levels = np.unique(rgb.max(axis=1)[single])
+    two_levels = single & np.isin(rgb.max(axis=1), [levels[len(levels) // 2], 255])
+    greys = np.flatnonzero(session.mask("grey"))
+    seven = np.isin(np.arange(len(session)), greys[:: max(1, greys.size // 7)][:7])
+    chart = session.subset(session.mask("black", "white", "validation") | two_levels | seven)
+    diagnosis = diagnose(chart)
+    document = json.loads(json.dumps(diagnosis.to_json()))  # inf would not survive as a number
+    scores = [step["cv_mean_dE00"] for step in document["cross_validation"]["steps"]]
+    scores += [document["cross_validation"]["baseline_cv_mean_dE00"]]
+    scores += list(document["model_choice"]["cv_mean_dE00"].values())
+    assert all(s is not None and np.isfinite(s) for s in scores), scores
+    assert not any("inf" in f["cross_validation"] for f in document["findings"])
+    authors = score_authors_method(chart)
+    assert diagnosis.extended_score.mean_dE00 <= authors.mean_dE00 + 0.02

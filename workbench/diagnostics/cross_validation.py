@@ -34,16 +34,21 @@ import numpy as np
 
 from workbench.colorimetry import delta_E2000
 from workbench.diagnostics.detectors import DiagnosisContext, build_context
+from workbench.diagnostics.evidence import partial_greys
 from workbench.diagnostics.extension import fit_extended
 from workbench.display import GammaMatrixDisplay
 from workbench.errors import InputError
 
-__all__ = ["FOLDS", "CV_Z", "NOISE_TESTED_TERMS", "fold_of_rows", "cross_validated_errors",
+__all__ = ["FOLDS", "MIN_FREE_LEVELS", "CV_Z", "NOISE_TESTED_TERMS", "fold_of_rows", "cross_validated_errors",
            "cross_validated_errors_of", "cross_validated_dE00", "group_mean",
            "paired_gain", "select_terms"]
 
 FOLDS = 5
 """K of the K-fold cross-validation."""
+
+MIN_FREE_LEVELS = 4
+"""A channel's sweep with fewer partial-drive levels than this (a grey ramp with fewer than one
+more) is kept whole in every training set: a model cannot be fitted on what a fold leaves."""
 
 CV_Z = 2.0
 """A term of :data:`NOISE_TESTED_TERMS` stays in the model only if it lowers the cross-validated
@@ -70,6 +75,15 @@ def fold_of_rows(context: DiagnosisContext, folds: int = FOLDS) -> np.ndarray:
     lit = rgb > 0
     fixed = (~lit.any(axis=1)) | ((lit.sum(axis=1) == 1) & (rgb.max(axis=1) >= 255))
     fixed |= context.copies
+    # a sweep or a grey ramp too short to lose a level (a chart with two levels per channel)
+    # stays whole in every training set: held out, it would leave a fold nothing to fit on
+    for c in range(3):
+        own = (lit.sum(axis=1) == 1) & lit[:, c] & (rgb[:, c] < 255)
+        if np.unique(rgb[own, c]).size < MIN_FREE_LEVELS:
+            fixed |= own
+    greys = partial_greys(rgb)
+    if np.unique(rgb[greys, 0]).size < MIN_FREE_LEVELS + 1:
+        fixed |= greys
     fold = np.full(len(session), -1)
     free = np.flatnonzero(~fixed)
     fold[free] = np.arange(free.size) % folds

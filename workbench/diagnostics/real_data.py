@@ -2,11 +2,14 @@
 
 For each file :func:`read_session` can read (``.ti3``, Psychtoolbox ``.mat``,
 and any other format a reader is registered for), :func:`real_data_table`
-runs :func:`~workbench.diagnostics.diagnose` and
-:func:`~workbench.diagnostics.argyll.score_argyll` on the same session: the
-findings with z and impact, baseline / extended / fallback held-out mean and
-p95 ΔE00, and ArgyllCMS's shaper + matrix profile fitted on exactly the same
-fit rows and scored on the same held-out rows. The OLED brightness-limiting
+runs :func:`~workbench.diagnostics.diagnose`,
+:func:`~workbench.diagnostics.argyll.score_argyll` and
+:func:`~workbench.diagnostics.authors.score_authors_method` on the same session:
+the findings with z and impact, baseline / exported (and which model was
+chosen) / fallback held-out mean and p95 ΔE00, ArgyllCMS's shaper + matrix
+profile and the seed authors' grey-ramp linearisation (where the file has a
+grey ramp), each fitted on exactly the same fit rows and scored on the same
+held-out rows. The OLED brightness-limiting
 sets (``oled-apl/``: the Samsung ``.mat``, the AW3225QF ColorChecker
 directory and one entry per white-window preset) have no full-field ramps:
 they are diagnosed for ``apl-dependence`` alone
@@ -72,6 +75,8 @@ class RealDataRow:
     fallback: dict | None = None
     fallback_protocol: str = ""
     argyll: dict | None = None
+    authors: dict | None = None
+    model_choice: str = ""
     apl_holdout: tuple = ()  # (by, % luminance, ΔE00, without: % luminance, ΔE00)
     noise: str = ""
     error: str = ""
@@ -94,6 +99,14 @@ class RealDataRow:
         return self.best_ours[1] < self.argyll["mean_dE00"]
 
     @property
+    def authors_margin(self) -> float | None:
+        """Exported model's held-out mean ΔE00 less the seed authors' method's (None: no greys)."""
+        if (self.authors is None or self.authors.get("mean_dE00") is None
+                or self.extended is None):
+            return None
+        return self.extended["mean_dE00"] - self.authors["mean_dE00"]
+
+    @property
     def extended_not_worse(self) -> bool | None:
         if self.extended is None or self.baseline is None:
             return None
@@ -107,6 +120,8 @@ class RealDataRow:
                 "untested": list(self.untested), "baseline": self.baseline,
                 "extended": self.extended, "fallback": self.fallback,
                 "fallback_protocol": self.fallback_protocol, "argyll": self.argyll,
+                "authors": self.authors, "model_choice": self.model_choice or None,
+                "exported_minus_authors_dE00": self.authors_margin,
                 "apl_holdout": [{"by": by, "luminance_error_pct": lum, "mean_dE00": dE,
                                  "without_load_term": {"luminance_error_pct": lum0,
                                                        "mean_dE00": dE0}}
@@ -133,9 +148,10 @@ class RealDataTable:
                               "white; Argyll fitted on exactly the fit rows"}
 
     def markdown(self) -> str:
-        lines = ["| file | findings (z, impact ΔE00; * in the model) | baseline | extended | "
-                 "fallback (residual LUT) | Argyll shaper + matrix | ours vs Argyll |",
-                 "|---|---|---|---|---|---|---|"]
+        lines = ["| file | findings (z, impact ΔE00; * in the model) | baseline | exported "
+                 "(model chosen) | fallback (residual LUT) | Argyll shaper + matrix | authors' grey "
+                 "ramp | ours vs Argyll |",
+                 "|---|---|---|---|---|---|---|---|"]
         for row in self.rows:
             if row.error:
                 continue
@@ -145,9 +161,11 @@ class RealDataTable:
                       else (row.argyll or {}).get("unavailable") or "—")
             verdict = ("—" if row.beats_argyll is None else
                        f"better ({row.best_ours[0]})" if row.beats_argyll else "worse")
+            authors = (_figures(row.authors) if row.authors and row.authors.get("mean_dE00")
+                       is not None else "—")
             lines.append(f"| `{row.file}` | {findings} | {_figures(row.baseline)} | "
-                         f"{_figures(row.extended)} | {_figures(row.fallback)} | {argyll} | "
-                         f"{verdict} |")
+                         f"{_figures(row.extended)} ({row.model_choice or 'extension'}) | "
+                         f"{_figures(row.fallback)} | {argyll} | {authors} | {verdict} |")
         lines.append("")
         held = [r for r in self.rows if r.apl_holdout and not r.error]
         if held:
@@ -180,8 +198,10 @@ class RealDataTable:
                          f"{row.seconds:.1f} s)")
             lines.append(f"    findings: {findings}")
             lines.append(f"    held-out mean / p95 ΔE00: baseline {_figures(row.baseline)}, "
-                         f"extended {_figures(row.extended)}, fallback {_figures(row.fallback)}, "
-                         f"Argyll shaper + matrix {argyll}"
+                         f"exported ({row.model_choice or 'extension'}) {_figures(row.extended)}, "
+                         f"fallback {_figures(row.fallback)}, Argyll shaper + matrix {argyll}, "
+                         f"authors' grey ramp "
+                         f"{_figures(row.authors) if row.authors else '—'}"
                          + ("" if row.beats_argyll is None else
                             f" → ours {'beats' if row.beats_argyll else 'does not beat'} Argyll"))
             for by, lum, dE, lum0, dE0 in row.apl_holdout:
@@ -192,6 +212,7 @@ class RealDataTable:
 
 def _row(path: Path, folder: Path, with_argyll: bool) -> RealDataRow:
     from workbench.diagnostics.argyll import ArgyllError, score_argyll
+    from workbench.diagnostics.authors import score_authors_method
     from workbench.diagnostics.load_only import LoadOnlyDiagnosis, diagnose_what_it_can
     from workbench.session_readers import read_session
 
@@ -215,6 +236,10 @@ def _row(path: Path, folder: Path, with_argyll: bool) -> RealDataRow:
         except ArgyllError as error:
             argyll = {"unavailable": str(error), "mean_dE00": None}
     fallback = document["fallback"]
+    authors = None
+    if not load_only:
+        score = score_authors_method(session)
+        authors = None if score.unavailable else score.to_json()
     return RealDataRow(
         file=name, measurements=len(session), validation=int(session.mask("validation").sum()),
         findings=tuple((f["effect"], f["z"] or 0.0, f["impact_dE00"] or 0.0, f["in_model"])
@@ -224,6 +249,8 @@ def _row(path: Path, folder: Path, with_argyll: bool) -> RealDataRow:
         extended=None if load_only else document["extended"]["validation"],
         fallback=None if fallback is None else fallback["validation"],
         fallback_protocol="" if fallback is None else fallback["protocol"], argyll=argyll,
+        authors=authors,
+        model_choice=((document.get("model_choice") or {}).get("chosen") or ""),
         apl_holdout=tuple((h["by"], h["luminance_error_pct"], h["mean_dE00"],
                            h["without_load_term"]["luminance_error_pct"],
                            h["without_load_term"]["mean_dE00"])
