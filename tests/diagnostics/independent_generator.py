@@ -20,6 +20,17 @@ own, and hides effects in these forms:
     ``power-limit``: the output falls once the luminance-weighted load
     passes a knee above any single channel's share, 5–15 % at white.
     Single-channel sweeps are untouched by all three.
+    ``power-limit-quadratic``: the panel dims the whole frame as its load
+    grows, gain ``1 − k·load²`` (load: the luminance-weighted mean channel
+    light, 1 at white), k = 5–15 %: the sweeps dim too;
+    ``knee``: no loss below a load of 0.4–0.6, then a linear loss reaching
+    5–15 % at white (the brighter sweeps pass the knee);
+    ``drive-crosstalk``: each lit channel's *drive* picks up a share s = 2–6 %
+    of its two neighbours' drives before the power law,
+    ``d_c' = min(1, d_c + s·(d_a + d_b)/2)`` where ``d_c > 0`` (a channel at
+    drive 0 is off and stays dark): a sweep's lit channel has dark
+    neighbours and its dark channels stay dark (untouched), white stays
+    additive (clipped at full drive), greys and mixtures brighten.
 ``chromaticity-shift``
     ``leak``: a fraction ``β₀(1 − d)^1.5`` of each channel's light has a
     fixed leak chromaticity; ``log-desaturation``: the fraction grows with
@@ -29,10 +40,32 @@ own, and hides effects in these forms:
     ``shoulder`` (compression toward full drive), ``s-curve`` (a blend with
     a smoothstep of the power law), ``soft-toe`` (a softplus black crush);
     1.5–6 % of full output from the nearest power law.
+    ``shoulder-soft``: ``(1 − e^(−a·L))/(1 − e^(−a))`` of the power-law light
+    ``L`` (a soft saturation toward full drive); ``toe``: a shadow lift
+    with a drive threshold, ``max(0, L + c·(B(d)(1 − d) − (1 − d)^8))`` with
+    the bump ``B(d) = (d/0.15)·e^(1 − d/0.15)``: nothing below about DAC 13,
+    the shadows above it lifted. For these two the magnitude is drawn as the
+    distance itself (1.5–6 % of full output, the largest of the three
+    channels, sup over the 256 DAC codes, from the nearest power law) and
+    the parameter solved for it.
 ``temporal-drift``
     ``warm-up`` (``1 − m/(1 + (t/τ)²)``), ``decline`` (linear), ``step``
     (at 30–70 % of the session), ``wander`` (two incommensurate sines);
     2–8 % peak to peak.
+
+The forms the seeded acceptance suite hides are :data:`SUITE_FORMS` (the
+forms above the later additions, whose sessions, draws and seeds are kept
+bit for bit); :data:`NEW_FORMS` are the additions and :data:`PAIRED_FORMS`
+names pairs a reviewer asked for. Every form draws its magnitudes from the
+session's stream only when it is hidden, so adding forms changes no earlier
+session.
+
+The result keeps the display, so the truth is known for any colour
+(:meth:`GeneratedSession.true_at`, :meth:`GeneratedSession.reference_XYZ`:
+the display in the state of the last two white references, the state a
+drift-corrected profile describes) and a bench can score a profile on
+colours no plan measured (:func:`hidden_colours`). Plans: any built-in plan
+name (``paper``, ``paper+greys``, ``authors-2024``, …).
 
 Noise: per measurement a Student-t (6 dof) whole-measurement gain scaled to
 ``a`` (0.05–0.5 %), per-coordinate noise 0.3·a, a shot-noise term ``∝ √Y``
@@ -50,16 +83,35 @@ import numpy as np
 from workbench.measurement.plans import measurement_plan
 from workbench.session import Session
 
-__all__ = ["FORMS", "GeneratedSession", "generate_session"]
+__all__ = ["FORMS", "SUITE_FORMS", "NEW_FORMS", "PAIRED_FORMS", "GeneratedSession",
+           "generate_session", "hidden_colours", "nearest_power_law_distance"]
 
-FORMS = {
+SUITE_FORMS = {
     "black-offset": ("bluish", "reddish"),
     "channel-interaction": ("backlight", "crosstalk", "power-limit"),
     "chromaticity-shift": ("leak", "log-desaturation"),
     "tone-curve-shape": ("shoulder", "s-curve", "soft-toe"),
     "temporal-drift": ("warm-up", "decline", "step", "wander"),
 }
-"""Effect id → the forms this generator hides it in."""
+"""Effect id → the forms the seeded acceptance suite hides (fixed: its sessions and seeds)."""
+
+NEW_FORMS = {
+    "channel-interaction": ("power-limit-quadratic", "knee", "drive-crosstalk"),
+    "tone-curve-shape": ("shoulder-soft", "toe"),
+}
+"""Effect id → the forms added after the suite was fixed (a reviewer's list)."""
+
+FORMS = {effect: forms + NEW_FORMS.get(effect, ()) for effect, forms in SUITE_FORMS.items()}
+"""Effect id → every form this generator hides it in."""
+
+PAIRED_FORMS = {
+    "warm-up beside sweeps": {"temporal-drift": "warm-up"},
+    "bluish + log-desaturation": {"black-offset": "bluish", "chromaticity-shift": "log-desaturation"},
+    "bluish + step": {"black-offset": "bluish", "temporal-drift": "step"},
+}
+"""Named scenarios a reviewer asked for: a warm-up while the sweeps are measured (on every
+plan, the authors' too), a bluish black beside a chromaticity shift toward the white, and a
+bluish black beside a step drift."""
 
 
 @dataclass(frozen=True)
@@ -69,6 +121,56 @@ class GeneratedSession:
     noise: float = 0.0
     true_XYZ: np.ndarray | None = None  # noiseless, effects on, at each row's time
     effect_free_XYZ: np.ndarray | None = None  # noiseless, no effect
+    display: "_Display | None" = None  # the display itself, effects on
+    effect_free_display: "_Display | None" = None  # the same draws, no effect
+    plan: str = "paper"
+
+    def true_at(self, rgb, t=None) -> np.ndarray:
+        """Noiseless XYZ of DAC triplets ``rgb`` (N, 3) at time(s) ``t`` (s; the session's end
+        when None), effects on."""
+        rgb = np.atleast_2d(np.asarray(rgb, dtype=float))
+        t = np.full(len(rgb), self.display.session_s) if t is None else np.broadcast_to(
+            np.asarray(t, dtype=float), (len(rgb),))
+        return self.display.XYZ(rgb, t)
+
+    def effect_free_at(self, rgb, t=None) -> np.ndarray:
+        """The same display with no effect (the paper's model exactly); ``t`` is ignored."""
+        rgb = np.atleast_2d(np.asarray(rgb, dtype=float))
+        return self.effect_free_display.XYZ(rgb, np.zeros(len(rgb)))
+
+    @property
+    def reference_gain(self) -> float:
+        """The drift's gain in the reference state: the mean over the last two white rows (1
+        without drift), as a drift correction normalizes."""
+        if self.display.drift is None:
+            return 1.0
+        session = self.session
+        whites = np.flatnonzero(session.mask("white"))[-2:]
+        return float(np.mean(self.display._drift(session.t_s[whites])))
+
+    def reference_XYZ(self, rgb) -> np.ndarray:
+        """Noiseless XYZ of ``rgb`` in the reference state (:attr:`reference_gain`): the
+        display a profile of this session should predict."""
+        rgb = np.atleast_2d(np.asarray(rgb, dtype=float))
+        return self.display.light(rgb) * self.reference_gain
+
+
+def hidden_colours(n: int = 300, seed: int = 0) -> np.ndarray:
+    """``n`` seeded random DAC triplets (uniform over the 8-bit cube), a stream no plan uses."""
+    return np.random.default_rng([int(seed), 0x41DDE1]).integers(0, 256, size=(n, 3)).astype(float)
+
+
+_CODES = np.arange(256) / 255.0
+_GAMMA_GRID = np.arange(0.3, 6.0, 0.02)
+
+
+def nearest_power_law_distance(output, drive=_CODES) -> float:
+    """``min over γ of max |output − drive^γ|``: a tone curve's distance from every power law."""
+    output = np.asarray(output, dtype=float)
+    distance = np.max(np.abs(output[None, :] - drive[None, :] ** _GAMMA_GRID[:, None]), axis=1)
+    best = _GAMMA_GRID[np.argmin(distance)]
+    fine = np.linspace(best - 0.02, best + 0.02, 41)
+    return float(np.min(np.max(np.abs(output[None, :] - drive[None, :] ** fine[:, None]), axis=1)))
 
 
 def _unit(xy) -> np.ndarray:
@@ -79,6 +181,10 @@ def _unit(xy) -> np.ndarray:
 def _xy(XYZ):
     XYZ = np.asarray(XYZ, dtype=float)
     return XYZ[..., :2] / XYZ.sum(axis=-1, keepdims=True)
+
+
+TOE_BUMP = 0.15
+"""Drive where the ``toe`` form's shadow lift peaks (before the threshold's pull)."""
 
 
 class _Display:
@@ -107,6 +213,11 @@ class _Display:
         if self.tone is None:
             return L
         form, p = self.tone
+        if form == "shoulder-soft":
+            return np.expm1(-p * L) / np.expm1(-p)
+        if form == "toe":
+            bump = (d / TOE_BUMP) * np.exp(1 - d / TOE_BUMP)
+            return np.maximum(0.0, L + p * (bump * (1 - d) - (1 - d) ** 8))
         if form == "shoulder":
             return (1 + p) * L / (1 + p * L ** 3)
         if form == "s-curve":
@@ -118,7 +229,23 @@ class _Display:
         return (crush(d) / crush(1.0)) ** self.gammas
 
     def XYZ(self, rgb, t):
-        d = np.clip(rgb / 255.0, 0, 1)
+        light = self.light(rgb)
+        if self.drift is not None:
+            light *= self._drift(t)[:, None]
+        return light
+
+    def _drive(self, d):
+        """drive-crosstalk: each lit channel's drive picks up a share of its neighbours' (clipped
+        at 1); a channel at drive 0 is off and picks up nothing."""
+        if self.interaction is None or self.interaction[0] != "drive-crosstalk":
+            return d
+        share = self.interaction[1]
+        picked = share * (d.sum(axis=1, keepdims=True) - d) / 2
+        return np.where(d > 0, np.minimum(1.0, d + picked), d)
+
+    def light(self, rgb):
+        """Noiseless XYZ of ``rgb`` (N, 3) without the drift."""
+        d = self._drive(np.clip(rgb / 255.0, 0, 1))
         L = self.linear(d)
         light = np.zeros((len(d), 3))
         for c in range(3):
@@ -133,8 +260,6 @@ class _Display:
             light += (self.columns[1, c] * L[:, c])[:, None] * unit * self._coupling(d, L, c)[:, None]
         light *= self._gain(d, L)[:, None]
         light += self.black
-        if self.drift is not None:
-            light *= self._drift(t)[:, None]
         return light
 
     def _coupling(self, d, L, c):
@@ -154,6 +279,11 @@ class _Display:
             load = L @ self.shares
             knee = self.shares.max() + 0.03
             return 1 - k * np.clip((load - knee) / (1 - knee), 0, 1)
+        if form == "power-limit-quadratic":
+            return 1 - k * (L @ self.shares) ** 2
+        if form == "knee":
+            knee = self.interaction[2]
+            return 1 - k * np.clip((L @ self.shares - knee) / (1 - knee), 0, 1)
         return np.ones(len(d))
 
     def _drift(self, t):
@@ -177,6 +307,8 @@ def _hide(display: _Display, effect: str, form: str, rng: np.random.Generator) -
         xy = (0.24, 0.22) if form == "bluish" else (0.37, 0.31)
         display.black = _unit(xy) * level * display.white_Y
         return level
+    if form in NEW_FORMS.get(effect, ()):
+        return _hide_new(display, effect, form, rng)
     if effect == "channel-interaction":
         k = rng.uniform(0.05, 0.15)
         if form == "backlight":
@@ -216,27 +348,62 @@ def _hide(display: _Display, effect: str, form: str, rng: np.random.Generator) -
     raise ValueError(f"unknown effect {effect!r}; use one of {sorted(FORMS)}")
 
 
+def _tone_distance(display: _Display) -> float:
+    """The largest channel's distance of the display's tone curves from the nearest power law."""
+    output = display.linear(np.repeat(_CODES[:, None], 3, axis=1))
+    return max(nearest_power_law_distance(output[:, c]) for c in range(3))
+
+
+def _hide_new(display: _Display, effect: str, form: str, rng: np.random.Generator) -> float:
+    """:data:`NEW_FORMS`: their draws come after the display's, only when they are hidden."""
+    if effect == "channel-interaction":
+        if form == "drive-crosstalk":
+            share = rng.uniform(0.02, 0.06)
+            display.interaction = (form, share, None)
+            return share
+        k = rng.uniform(0.05, 0.15)  # the loss at white (load 1)
+        display.interaction = (form, k, rng.uniform(0.4, 0.6) if form == "knee" else None)
+        return k
+    # tone-curve-shape: the distance from the nearest power law is drawn, the parameter solved
+    distance = rng.uniform(0.015, 0.06)
+    low, high = 0.0, {"shoulder-soft": 20.0, "toe": 0.5}[form]
+    for _ in range(30):
+        parameter = (low + high) / 2
+        display.tone = (form, parameter)
+        if _tone_distance(display) > distance:
+            high = parameter
+        else:
+            low = parameter
+    display.tone = (form, (low + high) / 2)
+    return float(_tone_distance(display))
+
+
 def generate_session(effects: dict | None = None, seed: int = 0,
                      noise: float | None = None, plan: str = "paper") -> GeneratedSession:
     """A plan (``paper`` unless told) measured on an independent display with ``effects`` hidden.
 
     Parameters
     ----------
-    effects : dict
-        Effect id → form (a value of :data:`FORMS`).
+    effects : dict or str
+        Effect id → form (a value of :data:`FORMS`), or a name of :data:`PAIRED_FORMS`.
     seed : int
         Seeds the display, the magnitudes, the plan's validation colours and the noise.
     noise : float, optional
         Relative gain noise ``a``; drawn from 0.05–0.5 % when None.
     plan : str
         The built-in measurement plan measured (``paper+greys`` adds greys and
-        partial-drive mixtures to the fit rows).
+        partial-drive mixtures to the fit rows; ``authors-2024`` is the seed
+        authors' own plan, with a grey ramp). The display and its effects are
+        drawn before the plan is read: one seed is one display on every plan.
 
     The result also holds the noiseless truth (``true_XYZ``: the display with
     its effects, at each row's time) and ``effect_free_XYZ`` (the same display
     with no effect: the paper's model exactly), so a suite can tell how much
     each session's effects change the colours it holds out.
     """
+    plan_name = plan
+    if isinstance(effects, str):
+        effects = PAIRED_FORMS[effects]
     rng = np.random.default_rng([seed, 90411])
     display = _Display(rng)
     hidden = {}
@@ -249,11 +416,7 @@ def generate_session(effects: dict | None = None, seed: int = 0,
     rgb = np.array([patch.rgb for patch in plan.patches], dtype=float)
     kinds = np.array([patch.kind for patch in plan.patches], dtype=object)
     # the clock: 4 s a patch, up to 40 s more for dark ones (a longer integration)
-    clean_Y = display.XYZ(rgb, np.zeros(len(rgb)))[:, 1] if display.drift is None else None
-    if clean_Y is None:
-        saved, display.drift = display.drift, None
-        clean_Y = display.XYZ(rgb, np.zeros(len(rgb)))[:, 1]
-        display.drift = saved
+    clean_Y = display.light(rgb)[:, 1]
     durations = 4.0 + 40.0 * np.exp(-np.maximum(clean_Y, 0) / (0.01 * display.white_Y))
     t = np.cumsum(durations)
     display.session_s = float(t[-1])
@@ -272,4 +435,5 @@ def generate_session(effects: dict | None = None, seed: int = 0,
                       metadata={"generator": "independent", "effects": {e: f for e, (f, _) in
                                                                        hidden.items()}})
     return GeneratedSession(session=session, effects=hidden, noise=a, true_XYZ=XYZ,
-                            effect_free_XYZ=effect_free_XYZ)
+                            effect_free_XYZ=effect_free_XYZ, display=display,
+                            effect_free_display=effect_free, plan=plan_name)

@@ -29,6 +29,10 @@ warm-up that ended before the validation colours were measured does not.
 Misses are listed with their figures (z against the critical z, the effect's
 size against the noise).
 
+The suite hides the generator's :data:`~tests.diagnostics.independent_generator.SUITE_FORMS`
+(the forms it was fixed with: the same 940 sessions, seed for seed); the forms added since
+are measured by ``tests/diagnostics/peer_bench.py``.
+
 Used by ``tests/diagnostics/test_acceptance_suite.py`` and by
 ``python -m workbench bench diagnose-suite``.
 """
@@ -42,7 +46,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from tests.diagnostics.independent_generator import FORMS, generate_session
+from tests.diagnostics.independent_generator import SUITE_FORMS as FORMS, generate_session
 
 __all__ = ["SEEDS_PER_FORM", "CLEAN_SESSIONS", "GREYS_CLEAN_SESSIONS", "GREYS_PAIRS", "SUITE_SEEDS",
            "suite_cases", "pooled_cases", "run_suite", "SessionOutcome", "SuiteResult"]
