@@ -171,3 +171,26 @@ def test_the_truth_is_known_for_any_colour(effects):
     else:
         assert generated.reference_gain == 1.0
         assert np.allclose(generated.true_at(hidden), reference)
+
+
+def test_the_peer_bench_counts_its_rates_without_a_diagnosis():
+    from tests.diagnostics.peer_bench import PeerOutcome, scenarios, summarize, table
+
+    assert {"clean", "channel-interaction/drive-crosstalk", "tone-curve-shape/toe"} <= set(
+        scenarios()) and set(PAIRED_FORMS) <= set(scenarios())
+
+    def outcome(seed, findings, ours, authors):
+        return PeerOutcome(plan="authors-2024", scenario="knee", seed=seed,
+                           effects={"channel-interaction": "knee"}, magnitudes={}, noise=0.001,
+                           findings=findings, ours_dE00=ours, baseline_dE00=1.0,
+                           authors_dE00=authors)
+
+    outcomes = [outcome(1, ("channel-interaction", "tone-curve-shape"), 0.30, 0.70),
+                outcome(2, ("tone-curve-shape", "channel-interaction"), 0.50, 0.45),
+                outcome(3, ("unexplained-residual",), 0.20, 0.20)]
+    row, = summarize(outcomes)
+    assert row["n"] == 3 and row["ours_dE00"] == pytest.approx(1.0 / 3)
+    assert row["ours_worse"] == pytest.approx(1 / 3)  # 0.50 > 0.45 + 0.01; 0.20 is a tie
+    assert row["all_named"] == pytest.approx(2 / 3) and row["first_injected"] == pytest.approx(1 / 3)
+    assert row["false_sessions"] == pytest.approx(2 / 3) and row["unexplained"] == 1
+    assert "seed 2" in table(outcomes)
