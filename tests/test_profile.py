@@ -58,6 +58,9 @@ def test_save_load_round_trip(tmp_path):
     (lambda d: d["engine"].update(k=-1), "engine/k"),
     (lambda d: d["lights"][0].update(rgb8=[300, 0, 0]), r"lights/0/rgb8/\d"),
     (lambda d: d.update(lut3d={"file": "../../etc/passwd.cube", "size": 17}), "lut3d/file"),
+    (lambda d: d.update(apl_test={"found": "no", "p_value": 0.5, "evidence": ""}), "apl_test/found"),
+    (lambda d: d.update(apl_test={"found": False, "p_value": 0.5}), "'evidence' is a required property"),
+    (lambda d: d.update(apl_test={"found": False, "p_value": 2.0, "evidence": ""}), "apl_test/p_value"),
 ])
 def test_invalid_profiles_are_rejected_with_the_place(tmp_path, mutate, message):
     document = paper_vive_profile().to_document()
@@ -66,6 +69,19 @@ def test_invalid_profiles_are_rejected_with_the_place(tmp_path, mutate, message)
     path.write_text(json.dumps(document))
     with pytest.raises(ProfileError, match=message):
         load_profile(path)
+
+
+def test_an_apl_test_record_round_trips_and_profiles_without_one_still_load(tmp_path):
+    record = {"found": False, "significant": False, "z": -0.5, "critical_z": 2.39, "p_value": 0.69,
+              "impact_dE00": 0.04, "evidence": "no change with the frame's load"}
+    profile = Profile.from_document({**paper_vive_profile().to_document(), "apl_test": record})
+    assert profile.apl_test == record and profile.apl_tested_absent
+    again = load_profile(save_profile(profile, tmp_path / "p.vrprofile.json"))
+    assert again.apl_test == record and again.apl_tested_absent
+    for name in ("htc-vive-paper", "simulated-headset"):  # written before the record existed
+        shipped = load_profile(example_profile_path(name))
+        assert shipped.apl_test is None and not shipped.apl_tested_absent
+        assert "apl_test" not in shipped.to_document()
 
 
 def test_unreadable_profiles(tmp_path):

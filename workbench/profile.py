@@ -4,7 +4,11 @@ A profile holds the headset's display model (type, parameters, white and black
 XYZ), its validation figures and diagnosis, the engine assumptions
 (frame-buffer encoding, ``k``, observer), the level-1 lights, and optionally
 level-2 data, a 3D-LUT sidecar (``display_inverse.cube`` of a runtime bundle,
-:mod:`workbench.export`) and the runtime colour space it assumes.
+:mod:`workbench.export`) and the runtime colour space it assumes. Where the
+calibration showed patches as windows on surrounds, the ``apl-dependence``
+test is recorded (``apl_test``) and, where it was found and modelled, the APL
+curve (``apl``); a profile whose ``apl_test`` did not find it predicts a patch
+on any frame as shown full field (:attr:`Profile.apl_tested_absent`).
 
 Reading is strict, in this order (:func:`load_profile`): the file's size
 (at most :data:`MAX_PROFILE_BYTES`), JSON without ``NaN``/``Infinity``, the
@@ -47,6 +51,7 @@ __all__ = [
     "RUNTIME_COLOUR_SPACE",
     "ProfileError",
     "check_apl_block",
+    "check_apl_test",
     "LIGHTS_LOAD",
     "check_display_parameters",
     "parse_profile_text",
@@ -61,6 +66,7 @@ __all__ = [
     "simulated_headset_profile",
     "profile_from_diagnosis",
     "apl_block",
+    "apl_test_record",
 ]
 
 PROFILE_FORMAT = "vr-colour-workbench-profile"
@@ -202,6 +208,17 @@ def check_apl_block(block: dict, source: str = "profile") -> None:
                            "re-export the profile from its session")
 
 
+def check_apl_test(record: dict, apl: dict | None, source: str = "profile") -> None:
+    """Refuse an ``apl_test`` record that contradicts the profile's ``apl`` block.
+
+    A test that did not find ``apl-dependence`` cannot come with an APL curve
+    (the curve is only fitted where the test found the effect).
+    """
+    if not record["found"] and apl is not None:
+        raise ProfileError(f"{source}: apl_test: says apl-dependence was not found, yet the "
+                           f"profile has an apl curve. {_FIX}")
+
+
 def parse_profile_text(text: str, source: str = "profile") -> "Profile":
     """Parse and fully validate a profile's JSON text (what :func:`load_profile` reads)."""
     def refuse_constant(name):
@@ -241,6 +258,7 @@ class Profile:
     lut3d: dict | None = None
     runtime: dict | None = field(default_factory=lambda: {"colour_space": RUNTIME_COLOUR_SPACE})
     apl: dict | None = None
+    apl_test: dict | None = None
     created: str = ""
     software: str = f"vr-colour-workbench {__version__}"
 
@@ -264,6 +282,17 @@ class Profile:
         from workbench.apl.predict import apl_curve_from_json
 
         return None if self.apl is None else apl_curve_from_json(self.apl)
+
+    @property
+    def apl_tested_absent(self) -> bool:
+        """Whether ``apl-dependence`` was tested (windows and surrounds measured) and not found.
+
+        Such a profile predicts a patch on any frame as the display model's
+        full-field prediction: gain 1 at every load. A profile without an
+        ``apl_test`` record (its calibration showed every patch full field, or
+        it predates the record) says nothing about other loads.
+        """
+        return self.apl is None and self.apl_test is not None and not self.apl_test["found"]
 
     @property
     def k(self) -> float:
@@ -306,6 +335,8 @@ class Profile:
             document["runtime"] = self.runtime
         if self.apl is not None:
             document["apl"] = self.apl
+        if self.apl_test is not None:
+            document["apl_test"] = self.apl_test
         return document
 
     @classmethod
@@ -316,6 +347,8 @@ class Profile:
         check_display_parameters(model["type"], model["parameters"], source)
         if document.get("apl") is not None:
             check_apl_block(document["apl"], source)
+        if document.get("apl_test") is not None:
+            check_apl_test(document["apl_test"], document.get("apl"), source)
         return cls(
             device=document["device"], display_model_type=model["type"],
             display_parameters=model["parameters"], white_XYZ=tuple(model["white_XYZ"]),
@@ -324,7 +357,7 @@ class Profile:
             diagnosis=document.get("diagnosis"), engine=document["engine"],
             lights=tuple(document["lights"]), level2=document.get("level2"),
             lut3d=document.get("lut3d"), runtime=document.get("runtime"),
-            apl=document.get("apl"),
+            apl=document.get("apl"), apl_test=document.get("apl_test"),
             created=document.get("created", ""),
             software=document["software"])
 
@@ -432,8 +465,9 @@ def profile_from_diagnosis(diagnosis) -> Profile:
     """The profile of a diagnosis: what ``diagnose SESSION --export PROFILE`` writes.
 
     The extended model (the baseline's when nothing was found), its held-out
-    validation figures, the findings, the APL curve where it is in the model,
-    and level-1 lights for the paper's sources.
+    validation figures, the findings, the ``apl-dependence`` test where the
+    session could test it, the APL curve where it is in the model, and level-1
+    lights for the paper's sources.
 
     Parameters
     ----------
@@ -451,6 +485,7 @@ def profile_from_diagnosis(diagnosis) -> Profile:
         diagnosis={"findings": [{"effect": f.effect, "evidence": f.evidence, "score": f.score}
                                 for f in diagnosis.findings]},
         apl=apl_block(diagnosis),
+        apl_test=apl_test_record(diagnosis),
     ).with_lights(PAPER_SOURCES)
 
 
@@ -464,6 +499,37 @@ def apl_block(diagnosis) -> dict | None:
                           "without_load_term": {"luminance_error_pct": h.luminance_error_pct_without,
                                                 "mean_dE00": h.dE00_without}}
                          for h in diagnosis.apl.holdouts]}
+
+
+def apl_test_record(diagnosis) -> dict | None:
+    """The profile's ``apl_test`` record: the diagnosis's ``apl-dependence`` test, where it was testable.
+
+    None where the session showed every patch full field (nothing was tested).
+    ``found`` false with no ``apl`` curve means the display's output does not
+    depend on the frame's load beyond noise (or by less than the materiality
+    floor): the profile then predicts a patch on any frame as full field.
+
+    Parameters
+    ----------
+    diagnosis : workbench.diagnostics.Diagnosis
+        A session's diagnosis (its ``results`` hold the APL detector's test).
+    """
+    context = getattr(diagnosis, "context", None)
+    if context is not None and not context.apl_testable:
+        return None
+    result = next((r for r in getattr(diagnosis, "results", ()) if r.effect == "apl-dependence"),
+                  None)
+    if result is None or not result.testable:
+        return None
+
+    def number(value):
+        value = None if value is None else float(value)
+        return value if value is not None and math.isfinite(value) else None
+
+    return {"found": bool(result.found), "significant": bool(result.significant),
+            "z": number(result.z), "critical_z": number(result.critical_z),
+            "p_value": float(result.p_value), "impact_dE00": number(result.impact_dE00),
+            "evidence": str(result.evidence)}
 
 
 SIMULATED_HEADSET_EFFECTS = {"channel-interaction": 0.1, "black-offset": 0.006}

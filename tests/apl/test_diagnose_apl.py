@@ -170,6 +170,122 @@ def test_the_bundle_carries_the_apl_curve_and_the_light_tables_say_their_load(ap
     assert LIGHTS_LOAD in out and "10 % window" in out
 
 
+def test_a_found_apl_dependence_is_recorded_beside_its_curve(apl_profile):
+    import json
+
+    from workbench.profile import ProfileError, load_profile, parse_profile_text
+
+    _, path = apl_profile
+    document = json.loads(path.read_text())
+    assert document["apl_test"]["found"] and document["apl_test"]["z"] > document["apl_test"]["critical_z"]
+    assert not load_profile(path).apl_tested_absent
+    # "not found" beside a curve contradicts itself
+    broken = {**document, "apl_test": {**document["apl_test"], "found": False}}
+    with pytest.raises(ProfileError, match="apl_test: says apl-dependence was not found"):
+        parse_profile_text(json.dumps(broken), "broken")
+
+
+def _predict(main, path, rows, monkeypatch, capsys):
+    import io
+
+    monkeypatch.setattr("sys.stdin", io.StringIO(rows))
+    code = main(["predict", str(path)])
+    captured = capsys.readouterr()
+    XYZ = None if code else np.array([[float(v) for v in line.split(",")]
+                                      for line in captured.out.strip().splitlines()[1:]])
+    return code, XYZ, captured.err
+
+
+@pytest.fixture(scope="module")
+def clean_apl_profile(tmp_path_factory):
+    """A clean simulated headset (no load dependence) measured on ``paper+apl``, diagnosed and exported."""
+    from workbench.cli.diagnose import export_profile
+    from workbench.simulated_sessions import simulate_session
+
+    diagnosis = diagnose(simulate_session({"black-offset": 0.004}, seed=5, plan="paper+apl"))
+    return diagnosis, export_profile(diagnosis, tmp_path_factory.mktemp("clean-apl") / "p.vrprofile.json")
+
+
+def test_apl_tested_and_absent_is_recorded_and_predict_takes_the_load_columns(clean_apl_profile, capsys,
+                                                                               monkeypatch):
+    import json
+
+    from workbench.cli import main
+    from workbench.profile import load_profile
+
+    diagnosis, path = clean_apl_profile
+    assert diagnosis.context.apl_testable and diagnosis.apl is None
+    (test,) = [r for r in diagnosis.results if r.effect == "apl-dependence"]
+    assert test.testable and not test.found
+    document = json.loads(path.read_text())
+    assert "apl" not in document
+    record = document["apl_test"]
+    assert record["found"] is False and record["evidence"] == test.evidence
+    assert record["z"] == pytest.approx(test.z) and record["p_value"] == pytest.approx(test.p_value)
+    assert record["critical_z"] == pytest.approx(test.critical_z)
+    profile = load_profile(path)
+    assert profile.apl_tested_absent and profile.apl_curve() is None
+    # the same patches full field, as windows on black and on lit surrounds: the same XYZ, no warning
+    rgb = ["255,255,255", "255,255,255", "200,100,50", "30,200,90"]
+    frames = ["1,0,0,0", "0.1,0,0,0", "0.3,64,64,64", "0.03,255,255,255"]
+    code, full, err = _predict(main, path, "r,g,b\n" + "\n".join(rgb) + "\n", monkeypatch, capsys)
+    assert code == 0 and err == ""
+    code, framed, err = _predict(main, path, "r,g,b,window,sr,sg,sb\n"
+                                 + "\n".join(f"{c},{f}" for c, f in zip(rgb, frames)) + "\n",
+                                 monkeypatch, capsys)
+    assert code == 0 and err == ""
+    np.testing.assert_array_equal(framed, full)
+    np.testing.assert_allclose(full, profile.display_model().forward(
+        np.array([[float(v) for v in c.split(",")] for c in rgb])), rtol=1e-5)
+
+
+def test_a_profile_never_tested_for_apl_still_refuses_the_load_columns(clean_apl_profile, tmp_path, capsys,
+                                                                     monkeypatch):
+    import json
+
+    from workbench.cli import main
+    from workbench.cli.diagnose import export_profile
+    from workbench.profile import load_profile
+    from workbench.simulated_sessions import simulate_session
+
+    # a session with every patch full field: nothing tested, nothing recorded
+    full_field = export_profile(diagnose(simulate_session({"black-offset": 0.004}, seed=5)),
+                                tmp_path / "full-field.vrprofile.json")
+    # and the tested profile as an older workbench wrote it (no apl_test record)
+    _, path = clean_apl_profile
+    document = json.loads(path.read_text())
+    del document["apl_test"]
+    older = tmp_path / "older.vrprofile.json"
+    older.write_text(json.dumps(document))
+    for untested in (full_field, older):
+        profile = load_profile(untested)
+        assert profile.apl_test is None and not profile.apl_tested_absent
+        code, _, err = _predict(main, untested, "255,255,255,0.1\n", monkeypatch, capsys)
+        assert code != 0 and "the profile has no APL curve, so it predicts full-field patches only" in err
+        code, XYZ, _ = _predict(main, untested, "255,255,255\n", monkeypatch, capsys)
+        assert code == 0 and XYZ.shape == (1, 3)
+
+
+def test_the_bundle_and_the_light_tables_say_apl_was_tested_and_absent(clean_apl_profile, tmp_path, capsys):
+    import json
+
+    from workbench.cli import main
+    from workbench.export.bundle import write_bundle
+    from workbench.profile import LIGHTS_LOAD, load_profile
+
+    _, path = clean_apl_profile
+    write_bundle(load_profile(path), tmp_path / "bundle", lut_size=9)
+    manifest = json.loads((tmp_path / "bundle" / "bundle.json").read_text())
+    assert manifest["apl"] is None and manifest["apl_test"] == json.loads(path.read_text())["apl_test"]
+    bundled = load_profile(tmp_path / "bundle" / "profile.vrprofile.json")
+    assert bundled.apl_tested_absent
+    readme = (tmp_path / "bundle" / "README.md").read_text()
+    assert "tested `apl-dependence`" in readme and "needs no load compensation" in readme
+    assert main(["illuminants", "show", "cie-d65", "--profile", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert LIGHTS_LOAD in out and "did not find it" in out
+
+
 def test_the_report_gives_the_apl_curves_held_out_error(apl_profile):
     from workbench.diagnostics.report import render_report
 

@@ -5,7 +5,10 @@ fraction of the field, default 1) and ``sr,sg,sb`` (the surround's DAC values,
 default 0), by header name (any order, any case) or, without a header, by
 position: ``r,g,b[,window[,sr,sg,sb]]``. A display model predicts the patch
 shown full field (the reference load); the APL curve scales that by
-``gain(L) / gain(L_ref)`` (:meth:`AplCurve.relative_gain`).
+``gain(L) / gain(L_ref)`` (:meth:`AplCurve.relative_gain`). A profile whose
+diagnosis tested ``apl-dependence`` and did not find it has no curve and
+predicts every frame as full field (gain 1 at every load); a profile that was
+never tested refuses windows and surrounds.
 """
 
 from __future__ import annotations
@@ -102,7 +105,8 @@ def read_predict_rows(text: str) -> PredictRows:
     return PredictRows(np.array(rgb), np.array(window), np.array(surround))
 
 
-def predict_XYZ_on_surround(forward, rows: PredictRows, curve: AplCurve | None = None) -> np.ndarray:
+def predict_XYZ_on_surround(forward, rows: PredictRows, curve: AplCurve | None = None, *,
+                            load_independent: bool = False) -> np.ndarray:
     """XYZ of each patch as shown: the display model's full-field prediction times the APL gain.
 
     Parameters
@@ -111,17 +115,21 @@ def predict_XYZ_on_surround(forward, rows: PredictRows, curve: AplCurve | None =
         The display model's ``RGB → XYZ`` for full-field patches.
     rows : PredictRows
     curve : AplCurve, optional
-        The profile's APL curve; without one, only full-field patches on
-        black can be predicted.
+        The profile's APL curve; without one (and without
+        ``load_independent``), only full-field patches can be predicted.
+    load_independent : bool
+        The display was tested for ``apl-dependence`` and it was not found
+        (:attr:`workbench.profile.Profile.apl_tested_absent`): with no curve,
+        every patch is predicted as shown full field (gain 1 at every load).
 
     Raises
     ------
     InputError
-        For windows or surrounds without an APL curve.
+        For windows or surrounds without an APL curve on a display not tested for one.
     """
     XYZ = np.asarray(forward(rows.rgb), dtype=float)
     if curve is None:
-        if not rows.full_field:
+        if not rows.full_field and not load_independent:
             raise InputError("the profile has no APL curve, so it predicts full-field patches only; drop the "
                              "window/sr,sg,sb columns or export a profile from a session measured with the "
                              "'apl' plan")

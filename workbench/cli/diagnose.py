@@ -36,7 +36,9 @@ def register(subparsers) -> None:
                     "default black; optional header naming the columns) on standard input; write "
                     "CSV X,Y,Z on standard output, as the profile's display model predicts, times "
                     "the profile's APL curve gain(L)/gain(L_ref) for a window or a lit surround "
-                    "(a profile without an APL curve predicts full-field patches only). With "
+                    "(a profile whose diagnosis tested apl-dependence and did not find it "
+                    "predicts any frame as full field; one never tested for it predicts "
+                    "full-field patches only). With "
                     "--inverse, read X,Y,Z (the profile's scale) and write the float DAC r,g,b "
                     "of the display inverse (the function display_inverse.cube samples; out of "
                     "gamut: clipped per channel, counted on standard error).")
@@ -247,7 +249,7 @@ def _predict(args) -> int:
     from workbench.apl.predict import predict_XYZ_on_surround, read_predict_rows
 
     XYZ = predict_XYZ_on_surround(model.forward, read_predict_rows(sys.stdin.read()),
-                                  profile.apl_curve())
+                                  profile.apl_curve(), load_independent=profile.apl_tested_absent)
     writer.writerow(["X", "Y", "Z"])
     for value in XYZ:
         writer.writerow([f"{v:.6g}" for v in value])

@@ -81,6 +81,9 @@ def _load_note(profile) -> str:
     from workbench.profile import LIGHTS_LOAD
 
     curve = profile.apl_curve()
+    if curve is None and profile.apl_tested_absent:
+        return LIGHTS_LOAD + ("; the profile's diagnosis tested apl-dependence and did not find "
+                              "it, so they hold on any frame")
     if curve is None:
         return LIGHTS_LOAD + " (the profile has no APL curve)"
     white = curve.relative_gain([[255.0, 255.0, 255.0]], [0.1], [[0.0, 0.0, 0.0]])[0]

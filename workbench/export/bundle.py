@@ -171,12 +171,19 @@ def _readme(profile: Profile, manifest: dict, accuracy: CubeAccuracy) -> str:
                     else "This model's drive is affine in XYZ: no correction table"),
         inverse_identical=f"{100 * manifest['runtime_inverse']['identical_share']:.2f}",
         inverse_max=manifest["runtime_inverse"]["max_counts"],
-        apl=_apl_text(manifest["apl"]), cells=CELLS, cells_last=CELLS - 1,
+        apl=_apl_text(manifest["apl"], manifest.get("apl_test")), cells=CELLS,
+        cells_last=CELLS - 1,
         version=BUNDLE_FORMAT_VERSION)
 
 
-def _apl_text(block: dict | None) -> str:
-    """The bundle README's account of the APL curve (or of its absence)."""
+def _apl_text(block: dict | None, test: dict | None = None) -> str:
+    """The bundle README's account of the APL curve (or of its absence, tested or not)."""
+    if block is None and test is not None and not test["found"]:
+        return ("This profile holds no APL curve (`apl` is null in `bundle.json`) because its "
+                "diagnosis tested `apl-dependence` on patches shown as windows on surrounds and "
+                "did not find it (`apl_test` in `bundle.json` and the profile: "
+                f"{test['evidence']}): every table of this bundle holds on any frame, "
+                "whatever its load; a runtime needs no load compensation.")
     if block is None:
         return ("This profile holds no APL curve (`apl` is null in `bundle.json`): its diagnosis "
                 "found no `apl-dependence`, or its calibration showed every patch full field, "
@@ -313,7 +320,7 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
                     "runtime_inverse": inverse_accuracy.to_json(),
                     "white_mapping_XYZ": [float(v) for v in white],
                     "lights_file": "lights.json", "lights": list(light_ids),
-                    "cubes": level2, "apl": profile.apl}
+                    "cubes": level2, "apl": profile.apl, "apl_test": profile.apl_test}
         with atomic_writer(staging / "README.md") as handle:
             handle.write(_readme(bundle_profile, manifest, accuracy))
         write_json(staging / "bundle.json", manifest)
