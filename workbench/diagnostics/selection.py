@@ -41,7 +41,7 @@ from workbench.diagnostics.detectors import (
     run_detectors,
     family_size,
 )
-from workbench.diagnostics.cross_validation import cross_validated_dE00, select_terms
+from workbench.diagnostics.cross_validation import cross_validated_errors, select_terms
 from workbench.diagnostics.model_choice import (
     GREY_RAMP_CANDIDATES,
     ModelChoice,
@@ -341,7 +341,8 @@ def diagnose(session: Session) -> Diagnosis:
                                 load_session=load_session)
     extended = (fit_extended(context, terms, baseline, tone_forms)
                 if cross_validation.get("use_extension") else baseline)
-    choice = _choose_model(context, extended is not baseline, terms, cross_validation)
+    choice = _choose_model(context, extended is not baseline, terms, cross_validation, baseline,
+                           cross_validation.get("tone_forms") or tone_forms)
     by_effect = dict(cross_validation["by_effect"])
     if choice.chosen in GREY_RAMP_CANDIDATES:
         drift_in = "temporal-drift" in terms and extended is not baseline
@@ -380,15 +381,14 @@ def diagnose(session: Session) -> Diagnosis:
                      model_choice=choice)
 
 
-def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation
-                  ) -> ModelChoice:
-    """:func:`~workbench.diagnostics.model_choice.choose_model` with term selection's scores."""
-    cv_baseline = cross_validation.get("baseline_cv_mean_dE00")
-    if cv_baseline is None:
-        cv_baseline = cross_validated_dE00(context, None)
-    cv_extension = cross_validation.get("extension_cv_mean_dE00", float("inf"))
-    return choose_model(context, "extension" if extension_used else "baseline", cv_extension,
-                        cv_baseline, drift="temporal-drift" in terms and extension_used)
+def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation,
+                  baseline, tone_forms) -> ModelChoice:
+    """:func:`~workbench.diagnostics.model_choice.choose_model` on term selection's result."""
+    baseline_errors = cross_validated_errors(context, None)
+    current_errors = (cross_validated_errors(context, terms, baseline, tone_forms)
+                      if extension_used else baseline_errors)
+    return choose_model(context, "extension" if extension_used else "baseline", current_errors,
+                        baseline_errors, drift="temporal-drift" in terms and extension_used)
 
 
 def _answered_by(candidate: str) -> set:
