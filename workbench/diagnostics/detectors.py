@@ -26,8 +26,12 @@ paper's model holds for this effect":
     degrees of freedom). Statistic: black / white in Y.
 ``channel-interaction``
     χ² (3 dof) of ``W + 2K − (R + G + B)`` in X, Y and Z with its covariance
-    (white, black and full-drive primaries), as an F-test against the noise
-    estimate's degrees of freedom. Statistic: ``1 − (W − K)/Σ(P − K)`` in Y.
+    (white, black and full-drive primaries; the noise model's, the
+    chromaticity noise carried into each one's X and Z included: ±0.0002 in
+    xy is 0.4 % of a deep blue's X and Z), as an F-test against the
+    degrees of freedom of the noise estimate (Satterthwaite's, where the
+    chromaticity noise, estimated apart or the instrument's stated figure,
+    carries part of the variance). Statistic: ``1 − (W − K)/Σ(P − K)`` in Y.
 ``chromaticity-shift``
     per channel, generalized least squares of the black-subtracted sweep's
     xy against ``(1 − d)`` and ``(1 − d)²`` (the full-drive point included,
@@ -395,17 +399,44 @@ def detect_black_offset(context: DiagnosisContext) -> DetectorResult:
 
 
 def _mean_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int) -> np.ndarray:
+    """Covariance of the mean of ``count`` measurements of ``XYZ`` (the chromaticity noise included)."""
     return noise.covariance(XYZ) / max(count, 1)
+
+
+def _mean_chromaticity_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int) -> np.ndarray:
+    """The chromaticity noise's part of :func:`_mean_covariance`."""
+    return noise.chromaticity_covariance(XYZ) / max(count, 1)
+
+
+def _scale_dof(noise: NoiseModel, covariance: np.ndarray, chromatic: np.ndarray,
+               projector: np.ndarray | None = None) -> float:
+    """Satterthwaite's degrees of freedom of a χ²'s noise scale whose ``covariance`` has a
+    ``chromatic`` part estimated apart (``noise.xy_dof``) from the rest (``noise.dof``).
+
+    Each part's share is its expected share of the χ² under no effect,
+    ``tr(C⁻¹ P Cᵢ Pᵀ) / tr(C⁻¹ P C Pᵀ)`` (``P``: the projector onto what the
+    test leaves, identity by default); the scale's relative variance is
+    ``Σ 2 wᵢ²/νᵢ``. A test whose variance is mostly the instrument's stated
+    chromaticity noise is then not held to the few degrees of freedom of a
+    luminance noise estimated from three repeated whites.
+    """
+    projector = np.eye(3) if projector is None else projector
+    inverse = np.linalg.inv(covariance)
+    total = float(np.trace(inverse @ projector @ covariance @ projector.T))
+    share = float(np.trace(inverse @ projector @ chromatic @ projector.T)) / total if total > 0 \
+        else 0.0
+    share = min(max(share, 0.0), 1.0)
+    return float(1.0 / ((1.0 - share) ** 2 / noise.dof + share ** 2 / noise.xy_dof))
 
 
 def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
     if context.white_count == 0:
         return _untestable("channel-interaction", "no white measured beside the primaries")
-    noise = context.noise
-    white, summed, covariance = _white_against_sum(context)
+    white, summed, covariance, chromatic = _white_against_sum(context)
     difference = white - summed
     chi2 = float(difference @ np.linalg.solve(covariance, difference))
-    p = f_sf(chi2 / 3, 3, noise.dof)  # the noise is estimated: F, not χ²
+    # the noise is estimated: F, not χ²
+    p = f_sf(chi2 / 3, 3, _scale_dof(context.noise, covariance, chromatic))
     ratio = white / summed
     statistic = 1.0 - float(ratio[1])
     standard_error = float(np.sqrt(covariance[1, 1]) / summed[1])
@@ -430,16 +461,22 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
 
 
 def _white_against_sum(context: DiagnosisContext):
-    """(white − black, Σ black-subtracted full primaries, covariance of their difference)."""
+    """(white − black, Σ black-subtracted full primaries, covariance of their difference, its
+    chromaticity-noise part).
+
+    ``W − K − Σ(P − K) = W + 2K − ΣP``: the white's covariance, four times the
+    black's and each primary's, each at its own measured XYZ (so a deep blue
+    carries the large X and Z uncertainty its small y gives it).
+    """
     noise = context.noise
     summed = sum(s.full_XYZ for s in context.sweeps)  # black subtracted
     white = context.white - context.black
-    covariance = _mean_covariance(noise, context.white, context.white_count)
-    covariance = covariance + 4 * _mean_covariance(noise, context.black, context.black_count)
-    for sweep in context.sweeps:
-        covariance = covariance + _mean_covariance(noise, sweep.full_XYZ + context.black,
-                                                   sweep.full_count)
-    return white, summed, covariance
+    measured = [(context.white, context.white_count, 1.0),
+                (context.black, context.black_count, 4.0)]
+    measured += [(s.full_XYZ + context.black, s.full_count, 1.0) for s in context.sweeps]
+    covariance = sum(w * _mean_covariance(noise, XYZ, n) for XYZ, n, w in measured)
+    chromatic = sum(w * _mean_chromaticity_covariance(noise, XYZ, n) for XYZ, n, w in measured)
+    return white, summed, covariance, chromatic
 
 
 CHANNEL_SPECIFIC_ALPHA = 0.001
@@ -483,15 +520,17 @@ def common_gain_test(context: DiagnosisContext) -> CommonGainTest | None:
     """
     if context.white_count == 0:
         return None
-    white, summed, covariance = _white_against_sum(context)
+    white, summed, covariance, chromatic = _white_against_sum(context)
     inverse = np.linalg.inv(covariance)
     gain = float(summed @ inverse @ white / (summed @ inverse @ summed))
     left = white - gain * summed
     chi2 = float(left @ inverse @ left)
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
     amounts = tuple(float(a) for a in 1.0 - np.linalg.solve(matrix, white))
-    return CommonGainTest(gain=gain, chi2=chi2, p_value=f_sf(chi2 / 2, 2, context.noise.dof),
-                          amounts=amounts)
+    # what the fit leaves: (I − H) white, H the generalized least squares projector onto Σ
+    projector = np.eye(3) - np.outer(summed, summed @ inverse) / float(summed @ inverse @ summed)
+    dof = _scale_dof(context.noise, covariance, chromatic, projector)
+    return CommonGainTest(gain=gain, chi2=chi2, p_value=f_sf(chi2 / 2, 2, dof), amounts=amounts)
 
 
 def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):

@@ -2,15 +2,22 @@
 
 A measurement ``v = (X, Y, Z)`` of a patch whose true value is ``v₀`` is modelled as
 
-``v = v₀ · (1 + ε_gain) + ε_coord + ε_floor``
+``v = v₀ · (1 + ε_gain) + J(v₀) · ε_xy + ε_floor``
 
 - ``ε_gain ~ N(0, a²)``: a whole-measurement gain (the luminance repeatability),
   common to X, Y and Z;
-- ``ε_coord ~ N(0, (c · v₀)²)`` per coordinate: what moves the chromaticity;
+- ``ε_xy ~ N(0, s² I₂)``: the chromaticity noise, independent in x and in y
+  and of the luminance (a spectroradiometer specifies it apart: the CS-2000
+  repeats Lv to 0.15 % and xy to ±0.0002). ``J = ∂(X, Y, Z)/∂(x, y)`` at
+  constant Y (``X = xY/y``, ``Z = (1 − x − y)Y/y``) carries it into XYZ:
+  ``J = [[S, −X/y], [0, 0], [−S, −(Y + Z)/y]]``, ``S = X + Y + Z``. The
+  same ``s`` is a small relative error in the X and Z of a white but a large
+  one in those of a deep blue (y ≈ 0.05: ±0.0002 in y is 0.4 % of its X and
+  Z), which is why it is a term of its own and not a share of each coordinate;
 - ``ε_floor ~ N(0, b²)`` per coordinate, ``b`` in the session's XYZ units: the
   absolute floor that dominates dark patches.
 
-so ``Cov(v) = a² v₀ v₀ᵀ + diag(c² v₀² + b²)`` (:meth:`NoiseModel.covariance`).
+so ``Cov(v) = a² v₀ v₀ᵀ + s² J Jᵀ + b² I`` (:meth:`NoiseModel.covariance`).
 
 Where the numbers come from (:func:`estimate_noise`), all from the rows a
 model may be fitted on:
@@ -22,9 +29,10 @@ model may be fitted on:
   so their variance is exact (``Σ_k A_ik² σ_k²``). ``a`` comes from the
   differences of the residuals of bright points (Y ≥ 5 % of white) measured
   one after another, which a display that drifts or wanders over minutes
-  does not inflate (the whole scatter is reported beside it); ``c`` from the
-  residuals of x and y; ``b`` from the dark points (Y < 2 % of white) and
-  repeated blacks. This is why the drift test can use it: it does not come
+  does not inflate (the whole scatter is reported beside it); ``s`` from the
+  residuals of x and y of the same bright points (the floor's share of them
+  taken out); ``b`` from the dark points (Y < 2 % of white) and repeated
+  blacks. This is why the drift test can use it: it does not come
   from the references under test.
 - **Repeated patches.** Rows with the same DAC values (under the same frame:
   window and surround) measured more than once
@@ -33,10 +41,17 @@ model may be fitted on:
   earlier row's to the last digit are copies (DisplayCAL writes its first
   whites that way), not measurements: they are excluded and counted. The
   white references also carry any drift between them, so this estimate is
-  the model's only when there are no sweeps to estimate from.
+  the model's only when there are no sweeps to estimate from. Their
+  chromaticities, differenced between successive repeats of the same patch
+  (a slow drift cancels), add to the squares that estimate ``s``.
 - **Instrument default.** Without sweeps or repeats:
-  :data:`DEFAULT_GAIN_SD`, :data:`DEFAULT_CHROMA_SD` and
+  :data:`DEFAULT_GAIN_SD`, :data:`INSTRUMENT_XY_SD` and
   :data:`DEFAULT_FLOOR_FRACTION`, and the model says so.
+- **Chromaticity floor.** ``s`` is never below :data:`INSTRUMENT_XY_SD`, the
+  CS-2000's specified xy repeatability: a session has few repeats, and a
+  sweep's bright points are mostly those of the white-ish greys and the red
+  and green ramps, so its own estimate can fall short of what a deep blue
+  primary's chromaticity does from reading to reading.
 
 Robust scale: every estimate is the mean of squared, leverage-corrected
 residuals winsorized at 4σ of their median-based scale, so a few outliers
@@ -58,7 +73,8 @@ __all__ = [
     "estimate_noise",
     "copy_rows",
     "DEFAULT_GAIN_SD",
-    "DEFAULT_CHROMA_SD",
+    "INSTRUMENT_XY_SD",
+    "xy_to_XYZ_jacobian",
     "DEFAULT_FLOOR_FRACTION",
     "DEFAULT_DOF",
     "MIN_SWEEP_LEVELS",
@@ -68,8 +84,16 @@ DEFAULT_GAIN_SD = 0.002
 """Instrument default luminance repeatability (1σ, relative): a CS-2000 specifies 0.15 % (2σ)
 on bright patches, a tristimulus colorimeter such as the i1 DisplayPro about 0.2 %."""
 
-DEFAULT_CHROMA_SD = 0.0005
-"""Instrument default per-coordinate relative noise (≈ 0.0002 in xy at a display white)."""
+INSTRUMENT_XY_SD = 0.0002
+"""Chromaticity noise (1σ, in x and in y) of one bright measurement, the floor of ``s``.
+
+Konica Minolta's CS-2000 specification gives an xy repeatability of ±0.0002 for
+a bright patch (its luminance repeatability, 0.15 % in Lv, is specified apart;
+both are quoted for illuminant A, xy worsening below about 1 cd/m²). It is
+used here as one standard deviation: the specification's figure is for a
+broadband source, and a display's deep blue primary (little ȳ signal, y ≈ 0.05)
+repeats its xy no better than that. A session's own scatter raises it, never
+lowers it."""
 
 DEFAULT_FLOOR_FRACTION = 2e-5
 """Instrument default absolute floor as a fraction of the white's Y."""
@@ -94,8 +118,9 @@ class NoiseModel:
     ----------
     gain_sd : float
         ``a``, relative luminance repeatability (1σ).
-    chroma_sd : float
-        ``c``, relative per-coordinate noise (1σ).
+    xy_sd : float
+        ``s``, chromaticity noise in x and in y (1σ): the session's own
+        estimate or :data:`INSTRUMENT_XY_SD`, whichever is larger.
     floor : float
         ``b``, absolute floor per coordinate, in the session's XYZ units.
     white_Y : float
@@ -123,10 +148,21 @@ class NoiseModel:
         default.
     copies : int
         Rows excluded as exact copies of an earlier row.
+    session_xy_sd : float or None
+        ``s`` from the session's own squares (sweep residuals, successive
+        repeats), before the floor; None with fewer than eight of them.
+    xy_points : int
+        Squares of x and y that estimate ``session_xy_sd``.
+    xy_dof : float
+        Degrees of freedom of ``s``: Satterthwaite's from its squares where
+        the session's estimate is the model's, :data:`DEFAULT_DOF` where the
+        floor is (the specification, treated as known). Tests whose variance
+        is mostly chromaticity noise weigh it against ``dof``
+        (:meth:`chromaticity_covariance` gives that part).
     """
 
     gain_sd: float
-    chroma_sd: float
+    xy_sd: float
     floor: float
     white_Y: float
     white_xy: tuple
@@ -137,18 +173,29 @@ class NoiseModel:
     sweep_points: int = 0
     repeat_groups: int = 0
     copies: int = 0
+    session_xy_sd: float | None = None
+    xy_points: int = 0
+    xy_dof: float = DEFAULT_DOF
 
     def covariance(self, XYZ) -> np.ndarray:
-        """Covariance (..., 3, 3) of one measurement of ``XYZ`` (..., 3)."""
+        """Covariance (..., 3, 3) of one measurement of ``XYZ`` (..., 3).
+
+        ``a² v vᵀ + s² J Jᵀ + b² I`` (module doc): the gain, the chromaticity
+        noise carried through ``J = ∂(X, Y, Z)/∂(x, y)`` at constant Y, the floor.
+        """
         v = np.abs(np.asarray(XYZ, dtype=float))
         outer = self.gain_sd ** 2 * v[..., :, None] * v[..., None, :]
-        diagonal = self.chroma_sd ** 2 * v ** 2 + self.floor ** 2
-        return outer + diagonal[..., :, None] * np.eye(3)
+        return outer + self.chromaticity_covariance(v) + self.floor ** 2 * np.eye(3)
+
+    def chromaticity_covariance(self, XYZ) -> np.ndarray:
+        """The chromaticity noise's part of :meth:`covariance`: ``s² J Jᵀ`` (..., 3, 3)."""
+        jacobian = xy_to_XYZ_jacobian(np.abs(np.asarray(XYZ, dtype=float)))
+        return self.xy_sd ** 2 * jacobian @ np.swapaxes(jacobian, -1, -2)
 
     def sd_Y(self, Y) -> np.ndarray:
         """Standard deviation of one luminance measurement at ``Y``."""
         Y = np.abs(np.asarray(Y, dtype=float))
-        return np.sqrt((self.gain_sd ** 2 + self.chroma_sd ** 2) * Y ** 2 + self.floor ** 2)
+        return np.sqrt(self.gain_sd ** 2 * Y ** 2 + self.floor ** 2)
 
     def relative_sd_Y(self, Y) -> np.ndarray:
         """Standard deviation of one luminance measurement at ``Y`` relative to ``|Y|`` (``ΔY/Y``)."""
@@ -191,6 +238,16 @@ class NoiseModel:
         else:
             text += (" (instrument default: the session has no sweep of "
                      f"≥ {MIN_SWEEP_LEVELS} levels and no repeated patch)")
+        if self.session_xy_sd is None:
+            text += (f"; xy noise {self.xy_sd:.5f}, the instrument floor (the CS-2000's specified "
+                     "repeatability; too few sweep points or repeats to estimate it)")
+        elif self.session_xy_sd <= self.xy_sd:
+            text += (f"; xy noise {self.xy_sd:.5f}, the instrument floor (the CS-2000's specified "
+                     f"repeatability; the session's own scatter gives {self.session_xy_sd:.5f} "
+                     f"from {self.xy_points} squares of x and y)")
+        else:
+            text += (f"; xy noise {self.xy_sd:.5f} from {self.xy_points} squares of x and y "
+                     "(sweep residuals, successive repeats)")
         if self.copies:
             text += (f"; {self.copies} row(s) identical to an earlier one to the last digit are "
                      "copies, not measurements, and were left out")
@@ -201,7 +258,10 @@ class NoiseModel:
             "relative_sd_Y_at_white": self.relative_sd_at(1.0),
             "sd_xy_at_white": self.sd_xy(self.white_XYZ()),
             "relative_sd_Y_at_1pct_of_white": self.relative_sd_at(0.01),
-            "gain_sd": self.gain_sd, "chroma_sd": self.chroma_sd, "floor": self.floor,
+            "gain_sd": self.gain_sd, "xy_sd": self.xy_sd,
+            "session_xy_sd": self.session_xy_sd, "xy_points": self.xy_points,
+            "xy_dof": self.xy_dof,
+            "instrument_xy_sd": INSTRUMENT_XY_SD, "floor": self.floor,
             "source": self.source, "repeat_gain_sd": self.repeat_gain_sd,
             "scatter_gain_sd": self.scatter_gain_sd,
             "dof": self.dof, "sweep_points": self.sweep_points,
@@ -215,6 +275,42 @@ def _xy_jacobian(XYZ: np.ndarray) -> np.ndarray:
     total = float(np.sum(XYZ))
     x, y = XYZ[0] / total, XYZ[1] / total
     return np.array([[1 - x, -x, -x], [-y, 1 - y, -y]]) / total
+
+
+_MIN_Y_SHARE = 1e-3  # y below this (no display primary) is taken at it: J stays finite
+
+
+def xy_to_XYZ_jacobian(XYZ) -> np.ndarray:
+    """∂(X, Y, Z)/∂(x, y) at constant Y (..., 3, 2), at ``XYZ`` (..., 3).
+
+    ``X = xY/y`` and ``Z = (1 − x − y)Y/y``: ``[[S, −X/y], [0, 0], [−S, −(Y + Z)/y]]``
+    with ``S = X + Y + Z`` and ``y = Y/S``. Zero where ``S`` is not positive.
+    """
+    v = np.asarray(XYZ, dtype=float)
+    X, Y, Z = v[..., 0], v[..., 1], v[..., 2]
+    S = X + Y + Z
+    positive = S > 0
+    S = np.where(positive, S, 0.0)
+    y = np.maximum(np.divide(Y, S, out=np.zeros_like(S), where=positive), _MIN_Y_SHARE)
+    jacobian = np.zeros(v.shape + (2,))
+    jacobian[..., 0, 0] = S
+    jacobian[..., 0, 1] = -np.where(positive, X, 0.0) / y
+    jacobian[..., 2, 0] = -S
+    jacobian[..., 2, 1] = -np.where(positive, Y + Z, 0.0) / y
+    return jacobian
+
+
+def _xy_floor_factor(XYZ: np.ndarray) -> np.ndarray:
+    """Variance of x and of y (N, 2) per unit floor variance ``b²`` at each ``XYZ`` (N, 3).
+
+    Zero where the total is not positive (a point that dark carries no weight where it is used).
+    """
+    total = XYZ.sum(axis=1)
+    positive = total > 0
+    safe = np.where(positive, total, 1.0)
+    x, y = XYZ[:, 0] / safe, XYZ[:, 1] / safe
+    factor = np.column_stack([(1 - x) ** 2 + 2 * x ** 2, (1 - y) ** 2 + 2 * y ** 2]) / safe[:, None] ** 2
+    return np.where(positive[:, None], factor, 0.0)
 
 
 def copy_rows(session: Session) -> np.ndarray:
@@ -336,7 +432,8 @@ def estimate_noise(session: Session) -> NoiseModel:
     white_Y = float(white[1])
     white_xy = (float(white[0] / white.sum()), float(white[1] / white.sum()))
 
-    gain_sq, successive_sq, chroma_sq, dark = [], [], [], []
+    gain_sq, successive_sq, dark = [], [], []
+    xy_sq, xy_floor = [], []  # squares of x and y residuals, and their floor share per unit b²
     for rows, drive, XYZ in _sweeps(session, ~copies):
         A, index = _loo_operator(drive)
         if index.size == 0:
@@ -357,21 +454,23 @@ def estimate_noise(session: Session) -> NoiseModel:
             difference = np.sqrt(((A_b[j] - A_b[j + 1]) ** 2) @ Y ** 2)
             successive_sq.append(((r_b[j] - r_b[j + 1]) / difference) ** 2)
         dark.extend(zip(Y[index][dim], r[dim] ** 2 / ((A[dim] ** 2).sum(axis=1))))
+        # chromaticity noise: the residual of x (of y) has variance s² Σ_k A_ik² plus the
+        # floor's share, b² Σ_k A_ik² f_k (taken out once b is known)
         total = XYZ.sum(axis=1)
+        inflation = (A ** 2).sum(axis=1)[bright]
+        floor_factor = (A ** 2)[bright] @ _xy_floor_factor(XYZ)
         for k in range(2):
-            coordinate = XYZ[:, k] / total
-            rc = A @ coordinate
-            xyz = XYZ[index] / total[index, None]
-            other = np.delete(xyz, k, axis=1)
-            scale = xyz[:, k] ** 2 * ((1 - xyz[:, k]) ** 2 + np.sum(other ** 2, axis=1))
-            inflation = (A ** 2).sum(axis=1)
-            chroma_sq.extend(rc[bright] ** 2 / inflation[bright] / scale[bright])
+            rc = A @ (XYZ[:, k] / total)
+            xy_sq.extend(rc[bright] ** 2 / inflation)
+            xy_floor.extend(floor_factor[:, k] / inflation)
 
     repeat_sq, groups = [], 0
     # a repeat is the same patch under the same frame (window, surround): an OLED shows a patch
     # dimmer when more of the frame is lit, which is apl-dependence, not noise
     keys = [tuple(v) + (w,) + tuple(s) for v, w, s in
             zip(session.rgb, session.window_or_full, session.surround_or_black)]
+    order = np.argsort(session.t_s, kind="stable") if session.t_s is not None else \
+        np.arange(len(session))
     for key in set(keys):
         rows = np.flatnonzero([(k == key) for k in keys] & ~copies)
         if rows.size < 2 or max(key[:3]) <= 0:
@@ -382,6 +481,13 @@ def estimate_noise(session: Session) -> NoiseModel:
         groups += 1
         deviations = Y / Y.mean() - 1.0
         repeat_sq.extend(deviations ** 2 * rows.size / (rows.size - 1))
+        # chromaticity: differences between successive repeats (a slow drift cancels), halved
+        rows = rows[np.argsort(np.argsort(order)[rows], kind="stable")]
+        XYZ = session.XYZ[rows]
+        xy = XYZ[:, :2] / XYZ.sum(axis=1)[:, None]
+        factor = _xy_floor_factor(XYZ)
+        xy_sq.extend((np.diff(xy, axis=0) ** 2 / 2).ravel())
+        xy_floor.extend(((factor[1:] + factor[:-1]) / 2).ravel())
     repeat_gain = float(np.sqrt(np.mean(repeat_sq))) if repeat_sq else None
 
     sweep_points = len(gain_sq)
@@ -398,10 +504,6 @@ def estimate_noise(session: Session) -> NoiseModel:
     else:
         relative = DEFAULT_GAIN_SD ** 2
         source = "instrument default"
-    chroma_var = (_robust_variance(np.asarray(chroma_sq)) if len(chroma_sq) >= _MIN_POINTS
-                  else DEFAULT_CHROMA_SD ** 2)
-    chroma_var = min(chroma_var, relative)  # a coordinate cannot be noisier than the total
-    gain_var = max(relative - chroma_var, 0.0)
     floor_var = (DEFAULT_FLOOR_FRACTION * white_Y) ** 2
     if len(dark) >= _MIN_POINTS:
         Y_dark, squares = (np.asarray(v) for v in zip(*dark))
@@ -409,8 +511,16 @@ def estimate_noise(session: Session) -> NoiseModel:
     blacks = session.XYZ[np.all(session.rgb <= 0, axis=1) & ~copies, 1]
     if blacks.size >= 2:  # repeated blacks measure the floor directly
         floor_var = max(floor_var, float(np.var(blacks, ddof=1)))
-    return NoiseModel(gain_sd=float(np.sqrt(gain_var)), chroma_sd=float(np.sqrt(chroma_var)),
+    session_xy, xy_dof = None, DEFAULT_DOF
+    if len(xy_sq) >= _MIN_POINTS:
+        variance = _robust_variance(np.asarray(xy_sq)) - floor_var * float(np.mean(xy_floor))
+        session_xy = float(np.sqrt(max(variance, 0.0)))
+        if session_xy > INSTRUMENT_XY_SD:  # the session's own estimate is the model's
+            xy_dof = effective_dof(xy_sq, SUCCESSIVE_OVERLAP)
+    xy_sd = max(session_xy or 0.0, INSTRUMENT_XY_SD)
+    return NoiseModel(gain_sd=float(np.sqrt(relative)), xy_sd=float(xy_sd),
                       floor=float(np.sqrt(floor_var)), white_Y=white_Y, white_xy=white_xy,
                       source=source, repeat_gain_sd=repeat_gain, scatter_gain_sd=scatter_gain,
                       dof=float(dof), sweep_points=sweep_points,
-                      repeat_groups=groups, copies=int(copies.sum()))
+                      repeat_groups=groups, copies=int(copies.sum()),
+                      session_xy_sd=session_xy, xy_points=len(xy_sq), xy_dof=float(xy_dof))
