@@ -13,7 +13,10 @@ builds the whole model from it. So the exported model is chosen among
 ``extension``          the extension with the terms selection kept (where it has any);
 ``grey-ramp``          the authors' grey-ramp linearisation, exportable;
 ``grey-ramp+sweeps``   the same, corrected toward each channel's own sweep as a colour
-                       leaves the grey axis (it reproduces greys and sweeps both).
+                       leaves the grey axis (it reproduces greys and sweeps both);
+``power-limit``        where the diagnosis found the sweeps' bend to be a power limit's
+                       (:mod:`workbench.diagnostics.power_limit`): power laws of the undimmed
+                       outputs and one load gain.
 
 The grey-ramp candidates exist where the fit rows hold at least
 :data:`~workbench.diagnostics.authors.MIN_GREYS` grey levels. Where
@@ -38,10 +41,12 @@ from workbench.diagnostics.cross_validation import (
 )
 from workbench.diagnostics.detectors import DiagnosisContext
 from workbench.diagnostics.evidence import partial_greys
+from workbench.diagnostics.power_limit import power_limit_model
 from workbench.display import DisplayModel
 from workbench.errors import InputError
 
-__all__ = ["MODEL_CANDIDATES", "GREY_RAMP_CANDIDATES", "NOISE_TESTED_CANDIDATES", "ModelChoice", "choose_model",
+__all__ = ["MODEL_CANDIDATES", "GREY_RAMP_CANDIDATES", "ALTERNATIVE_CANDIDATES",
+           "IDENTIFIED_CANDIDATES", "NOISE_TESTED_CANDIDATES", "ModelChoice", "choose_model",
            "fit_candidate", "has_grey_ramp"]
 
 MODEL_CANDIDATES = {
@@ -51,10 +56,22 @@ MODEL_CANDIDATES = {
                  "authors' method)",
     "grey-ramp+sweeps": "the grey ramp's tone curves, corrected toward each channel's sweep as a "
                         "colour leaves the grey axis",
+    "power-limit": "power laws of the undimmed outputs and one load gain for every patch (a "
+                   "power limit that bends the sweeps and dims the white)",
 }
 """Candidate id → what it is."""
 
 GREY_RAMP_CANDIDATES = ("grey-ramp", "grey-ramp+sweeps")
+
+IDENTIFIED_CANDIDATES = ("power-limit",)
+"""Candidates the evidence identified as the cause (a power limit that bends the sweeps and
+dims the white): taken unless they predict unseen fit rows worse beyond noise. The fit rows of
+the paper's plan are sweeps and whites, which flexible tone curves interpolate as well as the
+cause does; the mixtures the rows lack are where the cause's model is right and the flexible
+one is not."""
+
+ALTERNATIVE_CANDIDATES = ("power-limit",) + GREY_RAMP_CANDIDATES
+"""Candidates other than term selection's model, in the order they are tried."""
 
 NOISE_TESTED_CANDIDATES = ("grey-ramp+sweeps",)
 """Candidates that must beat the model they would replace by more than
@@ -70,11 +87,13 @@ def has_grey_ramp(context: DiagnosisContext) -> bool:
     return np.unique(rgb[partial_greys(rgb), 0]).size >= MIN_GREYS
 
 
-def fit_candidate(name: str, context: DiagnosisContext) -> DisplayModel:
-    """A grey-ramp candidate fitted on ``context``'s fit rows (drift-corrected where they are)."""
-    if name not in GREY_RAMP_CANDIDATES:
-        raise InputError(f"unknown grey-ramp candidate {name!r}; use one of "
-                         f"{', '.join(GREY_RAMP_CANDIDATES)}")
+def fit_candidate(name: str, context: DiagnosisContext, found=()) -> DisplayModel:
+    """An alternative candidate fitted on ``context``'s fit rows (drift-corrected where they are)."""
+    if name not in ALTERNATIVE_CANDIDATES:
+        raise InputError(f"unknown candidate {name!r}; use one of "
+                         f"{', '.join(ALTERNATIVE_CANDIDATES)}")
+    if name == "power-limit":  # the black only where black-offset was found (``found``)
+        return power_limit_model(context, with_black="black-offset" in found)
     return grey_ramp_model(context.fit, context.white, with_sweeps=name == "grey-ramp+sweeps")
 
 
@@ -98,7 +117,7 @@ class ModelChoice:
 
 
 def choose_model(context: DiagnosisContext, current: str, current_errors, baseline_errors,
-                 drift: bool) -> ModelChoice:
+                 drift: bool, power_limit: bool = False, found=()) -> ModelChoice:
     """The exported model: term selection's, or a grey-ramp candidate that beats it beyond noise.
 
     Parameters
@@ -112,10 +131,20 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         (:func:`~workbench.diagnostics.cross_validation.cross_validated_errors`; same folds).
     drift : bool
         Whether ``temporal-drift`` is in the model.
+    power_limit : bool
+        Whether the diagnosis identified a power limit that bends the sweeps
+        (:func:`~workbench.diagnostics.power_limit.tone_bend_explained`): the
+        ``power-limit`` candidate is then tried first, and taken where it
+        predicts unseen fit rows better.
+    found : sequence of str
+        The found effects (a candidate keeps the black only where
+        ``black-offset`` is among them).
 
     Notes
     -----
-    ``grey-ramp`` replaces the current model where it lowers the
+    ``power-limit`` (offered only where identified) replaces the current
+    model unless it predicts the fit rows worse beyond noise
+    (:data:`IDENTIFIED_CANDIDATES`); ``grey-ramp`` replaces the model chosen so far where it lowers the
     cross-validated error; ``grey-ramp+sweeps`` replaces the model chosen so
     far only where it lowers it by more than
     :data:`~workbench.diagnostics.cross_validation.CV_Z` standard errors of
@@ -132,21 +161,30 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         scores["extension"] = score(current_errors)
     chosen, chosen_errors = current, current_errors
     notes = []
-    if has_grey_ramp(context):
-        for name in GREY_RAMP_CANDIDATES:
+    names = (("power-limit",) if power_limit else ()) + (
+        GREY_RAMP_CANDIDATES if has_grey_ramp(context) else ())
+    if names:
+        for name in names:
             errors = cross_validated_errors_of(
-                context, lambda fold_context, _baseline, name=name: fit_candidate(name, fold_context),
+                context, lambda fold_context, _baseline, name=name: fit_candidate(
+                    name, fold_context, found),
                 drift=drift)
             scores[name] = score(errors)
             gain, standard_error = paired_gain(chosen_errors, errors)
-            needed = CV_Z * standard_error if name in NOISE_TESTED_CANDIDATES else 0.0
+            needed = (CV_Z * standard_error if name in NOISE_TESTED_CANDIDATES else
+                      -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES else 0.0)
             if gain > needed and np.isfinite(scores[name]):
-                notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}")
+                notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
+                             if gain > 0 else
+                             f"{name}, the identified cause, predicts no worse beyond noise than "
+                             f"the {chosen} ({gain:.3f} ± {standard_error:.3f})")
                 chosen, chosen_errors = name, errors
             elif np.isfinite(scores[name]):
                 notes.append(f"{name} does not beat the {chosen}"
                              + (f" beyond noise ({gain:.3f} ± {standard_error:.3f}, {CV_Z:g} "
-                                "standard errors needed)" if needed else f" ({gain:.3f})"))
+                                "standard errors needed)" if needed > 0 else
+                                f" and predicts worse beyond noise ({gain:.3f} ± "
+                                f"{standard_error:.3f})" if needed < 0 else f" ({gain:.3f})"))
     listed = ", ".join(f"{k} {v:.3f}" if np.isfinite(v) else f"{k} could not be fitted in a fold"
                        for k, v in scores.items())
     if not np.isfinite(scores.get(chosen, float("inf"))) and chosen == current:

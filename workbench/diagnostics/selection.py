@@ -38,12 +38,14 @@ from workbench.diagnostics.detectors import (
     DetectorResult,
     DiagnosisContext,
     build_context,
+    common_gain_test,
     run_detectors,
     family_size,
 )
 from workbench.diagnostics.cross_validation import cross_validated_errors, select_terms
+from workbench.diagnostics.power_limit import tone_bend_explained
 from workbench.diagnostics.model_choice import (
-    GREY_RAMP_CANDIDATES,
+    ALTERNATIVE_CANDIDATES,
     ModelChoice,
     choose_model,
     fit_candidate,
@@ -138,10 +140,17 @@ class Diagnosis:
 
     @property
     def findings(self) -> tuple[DetectorResult, ...]:
-        """Found effects: drift first, then by impact on the fixed colours, then unexplained."""
+        """Found effects: drift first, then by impact on the fixed colours, each consequence right
+        after its cause; then unexplained."""
         named = sorted((r for r in self.results if r.found),
                        key=lambda r: (r.effect != "temporal-drift", -(r.impact_dE00 or 0.0)))
-        return tuple(named) + ((self.unexplained,) if self.unexplained is not None else ())
+        causes = [r for r in named if not r.details.get("consequence_of")]
+        ordered = []
+        for cause in causes:
+            ordered.append(cause)
+            ordered += [r for r in named if r.details.get("consequence_of") == cause.effect]
+        ordered += [r for r in named if r not in ordered]
+        return tuple(ordered) + ((self.unexplained,) if self.unexplained is not None else ())
 
     @property
     def untested(self) -> tuple[tuple[str, str], ...]:
@@ -255,7 +264,8 @@ def _finding_json(result: DetectorResult) -> dict:
             "critical_z": _number(result.critical_z), "threshold": _number(result.threshold),
             "impact_dE00": _number(result.impact_dE00), "significant": result.significant,
             "testable": result.testable, "in_model": result.in_model,
-            "cross_validation": result.cross_validation}
+            "cross_validation": result.cross_validation,
+            "consequence_of": result.details.get("consequence_of")}
 
 
 def with_measurement_order(session: Session) -> Session:
@@ -329,6 +339,7 @@ def diagnose(session: Session) -> Diagnosis:
                                               tone_candidates=PARAMETRIC_TONE_FORMS))
     results = _materiality(context, results, baseline, tone_forms)
     found = [r.effect for r in results if r.found and r.effect != APL_EFFECT]
+    results, power_limit = _consequences(context, results, found)
     if "tone-curve-shape" in found:
         tone_forms = _tone_forms(fit_extended(context, significant, baseline))
     if "temporal-drift" not in found and context.drift_found:
@@ -342,11 +353,11 @@ def diagnose(session: Session) -> Diagnosis:
     extended = (fit_extended(context, terms, baseline, tone_forms)
                 if cross_validation.get("use_extension") else baseline)
     choice = _choose_model(context, extended is not baseline, terms, cross_validation, baseline,
-                           cross_validation.get("tone_forms") or tone_forms)
+                           cross_validation.get("tone_forms") or tone_forms, power_limit, found)
     by_effect = dict(cross_validation["by_effect"])
-    if choice.chosen in GREY_RAMP_CANDIDATES:
+    if choice.chosen in ALTERNATIVE_CANDIDATES:
         drift_in = "temporal-drift" in terms and extended is not baseline
-        extended = fit_candidate(choice.chosen, context)
+        extended = fit_candidate(choice.chosen, context, found)
         answered = _answered_by(choice.chosen) | ({"temporal-drift"} if drift_in else set())
         terms = [r.effect for r in results if r.found and r.effect in answered]
         for effect in [r.effect for r in results if r.found and r.effect != APL_EFFECT]:
@@ -363,7 +374,7 @@ def diagnose(session: Session) -> Diagnosis:
     if len(validation):
         baseline_dE = delta_E2000(baseline.forward(validation.rgb), validation.XYZ, white)
         extended_dE = _score_extended(extended, context, in_model, validation, white)
-        attribution = (None if choice.chosen in GREY_RAMP_CANDIDATES else
+        attribution = (None if choice.chosen in ALTERNATIVE_CANDIDATES else
                        _attribution(context, in_model, baseline, validation, white, tone_forms))
     else:
         baseline_dE = extended_dE = np.zeros(0)
@@ -382,19 +393,48 @@ def diagnose(session: Session) -> Diagnosis:
 
 
 def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation,
-                  baseline, tone_forms) -> ModelChoice:
+                  baseline, tone_forms, power_limit: bool = False, found=()) -> ModelChoice:
     """:func:`~workbench.diagnostics.model_choice.choose_model` on term selection's result."""
     baseline_errors = cross_validated_errors(context, None)
     current_errors = (cross_validated_errors(context, terms, baseline, tone_forms)
                       if extension_used else baseline_errors)
     return choose_model(context, "extension" if extension_used else "baseline", current_errors,
-                        baseline_errors, drift="temporal-drift" in terms and extension_used)
+                        baseline_errors, drift="temporal-drift" in terms and extension_used,
+                        power_limit=power_limit, found=found)
 
 
 def _answered_by(candidate: str) -> set:
-    """Named effects a grey-ramp candidate models (its black, its flexible curves, its blend)."""
+    """Named effects an alternative candidate models (its black, its curves, its interaction)."""
     answered = {"black-offset", "tone-curve-shape"}
-    return answered | ({"channel-interaction"} if candidate == "grey-ramp+sweeps" else set())
+    return answered | ({"channel-interaction"} if candidate in ("grey-ramp+sweeps", "power-limit")
+                       else set())
+
+
+def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, bool]:
+    """Mark a finding that another finding explains as its consequence (``consequence_of``).
+
+    A power limit (``channel-interaction`` whose white falls short by one gain
+    on every channel) dims each sweep by its own load, which bends the
+    bright channels' tone curves: where one load gain explains the sweeps
+    and the white together and, divided out, leaves no sweep off a power law
+    (:func:`~workbench.diagnostics.power_limit.tone_bend_explained`),
+    ``tone-curve-shape`` is its consequence. Returns the results and whether
+    the power limit was identified (the model choice then offers it).
+    """
+    if not {"channel-interaction", "tone-curve-shape"} <= set(found):
+        return results, False
+    common = common_gain_test(context)
+    if common is not None and common.channel_specific:
+        return results, False
+    explained, why, _ = tone_bend_explained(context)
+    if not explained:
+        return results, False
+    note = f"the bend that channel-interaction's power limit puts on the sweeps: {why}"
+    return tuple(replace(r, evidence=f"{r.evidence}; a consequence of channel-interaction, "
+                                     f"{note}",
+                         details={**r.details, "consequence_of": "channel-interaction",
+                                  "consequence": note})
+                 if r.effect == "tone-curve-shape" else r for r in results), True
 
 
 def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None

@@ -24,6 +24,11 @@
   at the sweep levels, interpolated linearly), ``w_c = clip(mean_{o≠c} L_o / L_c,
   0, 1)`` how grey the colour is from channel ``c``'s side: 1 on the greys
   (the grey ramp exactly), 0 on the channel's own axis (its sweep exactly).
+  *Power limit* (``load_weights`` set): one gain for every channel,
+  ``s = 1 − a · clip((load − knee)/(1 − knee), 0, 1)^p`` of the
+  luminance-weighted load ``Σ w_c L_c`` (a single channel loads the panel by
+  its share of the white, so the sweeps carry the limit too; the tone
+  curves are then those of the undimmed output).
   *Load knee* (legacy, ``amounts`` None): one gain
   ``s = 1 − a · clip((load − knee)/(1 − knee), 0, 1)``, ``load`` the mean of the
   ``L_c`` (OLED power limiting); ``a < 0`` is super-additivity.
@@ -86,6 +91,8 @@ class ChannelInteraction:
     exponent: float = 2.0
     axis_ratio: tuple | None = None
     """Per channel (outputs, ratios): the sweep-to-grey-ramp ratio ``r_c`` at grey-ramp outputs."""
+    load_weights: tuple | None = None
+    """Power-limit form: each channel's share of the load (its share of the white's luminance)."""
 
     def gain(self, load: np.ndarray) -> np.ndarray:
         """Legacy form: the one gain at mean load ``load``."""
@@ -95,6 +102,10 @@ class ChannelInteraction:
     def channel_gains(self, output: np.ndarray) -> np.ndarray:
         """Gain (..., 3) of each channel's light at channel outputs ``output`` (..., 3)."""
         output = np.clip(output, 0.0, 1.0)
+        if self.load_weights is not None:
+            load = output @ np.asarray(self.load_weights, dtype=float)
+            excess = np.clip((load - self.knee) / (1.0 - self.knee), 0.0, 1.0)
+            return np.repeat((1.0 - self.amount * excess ** self.exponent)[..., None], 3, axis=-1)
         if self.axis_ratio is not None:
             gains = np.ones(output.shape)
             for c, (levels, ratios) in enumerate(self.axis_ratio):
@@ -110,6 +121,9 @@ class ChannelInteraction:
         return 1.0 - np.asarray(self.amounts) * (codrive ** self.exponent)[..., None]
 
     def to_json(self) -> dict:
+        if self.load_weights is not None:
+            return {"amount": self.amount, "knee": self.knee, "exponent": self.exponent,
+                    "load_weights": [float(w) for w in self.load_weights]}
         if self.axis_ratio is not None:
             return {"amount": self.amount,
                     "axis_ratio": [{"output": [float(v) for v in levels],
@@ -225,6 +239,8 @@ class ExtendedDisplay(DisplayModel):
             interaction=None if interaction is None else ChannelInteraction(**{
                 **interaction, **({"amounts": tuple(interaction["amounts"])}
                                   if interaction.get("amounts") is not None else {}),
+                **({"load_weights": tuple(interaction["load_weights"])}
+                   if interaction.get("load_weights") is not None else {}),
                 **({"axis_ratio": tuple((tuple(r["output"]), tuple(r["ratio"]))
                                         for r in interaction["axis_ratio"])}
                    if interaction.get("axis_ratio") is not None else {})}),

@@ -1,0 +1,246 @@
+"""A power limit read from the sweeps: when the tone curves' bend is the interaction's doing.
+
+A panel that limits its power dims the whole frame as its load grows. On the
+paper's plan its only mixture is white, but the single-channel sweeps carry
+the limit too: a sweep of channel ``c`` at drive ``d`` loads the panel by
+``w_c · L_c(d)`` (``w_c`` the channel's share of the white's luminance), so a
+bright channel (green) bends near full drive and a dim one (blue) hardly at
+all. The tone-curve test then finds "not a power law" on the bright channels,
+and the interaction test finds the white short of R + G + B: one cause,
+two findings.
+
+:func:`fit_power_limit` fits one model to all three sweeps and the white
+references together (in luminance, weighted by the noise model): per channel
+a power law of its *undimmed* output, times one load gain shared by every
+patch,
+
+``Y = K + δ + g(Σ_c w_c A_c d_c^γ_c / Σ A) · Σ_c A_c d_c^γ_c``,
+``g(x) = 1 − a · clip((x − k) / (1 − k), 0, 1)^q``
+
+(``a`` the loss at full load, ``k`` the knee, ``q`` the shape: 1 a linear
+loss past a knee, 2 quadratic in load; ``δ`` the black as the sweeps see it
+less the measured black, whose own noise would otherwise bend every dark
+point). The same ``g`` scales X, Y and Z: a
+power limit keeps chromaticity. :func:`tone_bend_explained` says whether
+this model leaves the sweeps within their noise where the plain power laws
+did not, and the white with them: then ``tone-curve-shape`` is reported as
+the consequence of ``channel-interaction`` (``consequence_of``), and the
+extension can use the load gain as its interaction term
+(:class:`~workbench.display.extended.ChannelInteraction` ``load_weights``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from workbench.diagnostics.detectors import DiagnosisContext, family_size
+from workbench.diagnostics.significance import critical_p, f_sf
+
+__all__ = ["PowerLimitFit", "fit_power_limit", "tone_bend_explained", "undimmed_sweeps_tone_p",
+           "power_limit_model",
+           "MIN_SWEEP_LEVELS"]
+
+MIN_SWEEP_LEVELS = 8
+"""Sweep levels per channel the joint fit needs (the paper's plan has 51)."""
+
+
+@dataclass(frozen=True)
+class PowerLimitFit:
+    """The joint fit: power laws of the undimmed outputs and one load gain (module doc).
+
+    ``chi2`` and ``dof`` are of the sweeps and whites under this model;
+    ``chi2_power`` of the same rows under plain power laws (no load gain,
+    each sweep normalized by its own full-drive point, the white free).
+    """
+
+    gamma: tuple
+    full_Y: tuple  # A_c: undimmed full-drive luminance, black subtracted
+    loss: float  # a
+    knee: float  # k
+    shape: float  # q
+    black_offset_Y: float  # the black's luminance as the sweeps see it, less the black rows'
+    chi2: float
+    dof: int
+    chi2_power: float
+    dof_power: int
+
+    @property
+    def weights(self) -> np.ndarray:
+        A = np.asarray(self.full_Y)
+        return A / A.sum()
+
+    def gain(self, load) -> np.ndarray:
+        x = np.clip((np.asarray(load, dtype=float) - self.knee) / (1.0 - self.knee), 0.0, 1.0)
+        return 1.0 - self.loss * x ** self.shape
+
+    def describe(self) -> str:
+        form = ("quadratic in load" if abs(self.shape - 2) < 0.25 and self.knee < 0.05 else
+                f"past a knee at {100 * self.knee:.0f} % load" if self.knee >= 0.05 else
+                f"as load^{self.shape:.1f}")
+        return f"a power limit: {100 * self.loss:.1f} % of the light lost at full load, {form}"
+
+
+def _rows(context: DiagnosisContext):
+    """(channel, drive, Y black-subtracted, sd) of every sweep point, and the white's (Y, sd)."""
+    channel, drive, Y, sd = [], [], [], []
+    for sweep in context.sweeps:
+        counts = np.ones(sweep.drive.size) if sweep.counts is None else sweep.counts
+        values = sweep.XYZ[:, 1]
+        channel.append(np.full(sweep.drive.size, sweep.channel))
+        drive.append(sweep.drive)
+        Y.append(values)
+        sd.append(context.noise.sd_Y(values + context.black[1]) / np.sqrt(counts))
+    white = float(context.white[1] - context.black[1])
+    white_sd = float(context.noise.sd_Y(context.white[1]) / np.sqrt(max(context.white_count, 1)))
+    return (np.concatenate(channel), np.concatenate(drive), np.concatenate(Y),
+            np.concatenate(sd), white, white_sd)
+
+
+def fit_power_limit(context: DiagnosisContext) -> PowerLimitFit | None:
+    """The joint power-law + load-gain fit (module doc), or None without the rows it needs."""
+    if context.white_count == 0 or len(context.sweeps) != 3:
+        return None
+    if any((s.drive < 1).sum() < MIN_SWEEP_LEVELS for s in context.sweeps):
+        return None
+    channel, drive, Y, sd, white, white_sd = _rows(context)
+    full = np.array([s.full_XYZ[1] for s in context.sweeps])
+    if np.any(full <= 0) or white <= 0:
+        return None
+
+    def predict(theta):
+        gamma, A = theta[:3], theta[3:6]
+        a, k, q, offset = theta[6:]
+        weights = A / A.sum()
+        L = np.clip(drive, 0, 1) ** gamma[channel]
+        load = weights[channel] * L
+        x = np.clip((load - k) / (1 - k), 0, 1)
+        sweep = A[channel] * L * (1 - a * x ** q) + offset
+        return sweep, A.sum() * (1 - a) + offset
+
+    def residual(theta, weights=sd):
+        sweep, white_pred = predict(theta)
+        return np.concatenate([(sweep - Y) / weights, [(white_pred - white) / white_sd]])
+
+    best = None
+    for knee in (0.0, 0.3, 0.6):
+        for shape in (1.0, 2.0):
+            start = [2.2, 2.2, 2.2, *full, 0.05, knee, shape, 0.0]
+            try:
+                fit = least_squares(residual, start,
+                                    bounds=([0.3] * 3 + [0.0] * 3 + [-0.5, 0.0, 0.5, -np.inf],
+                                            [8.0] * 3 + [np.inf] * 3 + [0.95, 0.9, 4.0, np.inf]))
+            except ValueError:
+                continue
+            if best is None or fit.cost < best.cost:
+                best = fit
+    if best is None:
+        return None
+    chi2 = float(2 * best.cost)
+    dof = int(Y.size + 1 - best.x.size)
+
+    # plain power laws: each sweep normalized by its own full point, the white fitted freely
+    def residual_power(theta, weights=sd):
+        gamma, A, offset = theta[:3], theta[3:6], theta[6]
+        return (A[channel] * np.clip(drive, 0, 1) ** gamma[channel] + offset - Y) / weights
+
+    power = least_squares(residual_power, [2.2, 2.2, 2.2, *full, 0.0],
+                          bounds=([0.3] * 3 + [0.0] * 3 + [-np.inf],
+                                  [8.0] * 3 + [np.inf] * 3 + [np.inf]))
+    chi2_power = float(2 * power.cost)
+    return PowerLimitFit(gamma=tuple(float(v) for v in best.x[:3]),
+                         full_Y=tuple(float(v) for v in best.x[3:6]),
+                         loss=float(best.x[6]), knee=float(best.x[7]), shape=float(best.x[8]),
+                         black_offset_Y=float(best.x[9]),
+                         chi2=chi2, dof=dof, chi2_power=chi2_power,
+                         dof_power=int(Y.size - power.x.size))
+
+
+def undimmed_sweeps_tone_p(context: DiagnosisContext, fit: PowerLimitFit) -> float:
+    """The tone-curve test's p-value on the sweeps with the fitted load gain divided out.
+
+    Each sweep point is divided by ``g`` at its own load (the fitted power
+    law's output of the channel times its weight), then tested exactly as
+    ``tone-curve-shape`` tests a sweep (power law against the alternative
+    shapes and its lack of fit, Bonferroni over the channels).
+    """
+    from workbench.diagnostics.detectors import _tone_test_points
+
+    weights = fit.weights
+    p_values = []
+    for sweep in context.sweeps:
+        c = sweep.channel
+        L = np.clip(sweep.drive, 0, 1) ** fit.gamma[c]
+        gain = fit.gain(weights[c] * L)
+        counts = np.ones(sweep.drive.size) if sweep.counts is None else sweep.counts
+        black = context.black[1]
+        Y = np.concatenate([np.full(context.black_count, black), sweep.XYZ[:, 1] / gain + black])
+        drive = np.concatenate([np.zeros(context.black_count), sweep.drive])
+        n = np.concatenate([np.ones(context.black_count), counts])
+        sd = context.noise.sd_Y(Y) / np.sqrt(n)
+        full = float(sweep.full_XYZ[1] / gain[-1])
+        p_values.append(_tone_test_points(drive, Y, sd, black, full, context.noise.dof)[0])
+    return min(1.0, len(p_values) * min(p_values))
+
+
+def tone_bend_explained(context: DiagnosisContext, fit: PowerLimitFit | None = None
+                        ) -> tuple[bool, str, PowerLimitFit | None]:
+    """Whether one power limit explains the sweeps' bend and the white together.
+
+    Explained: the load gain lowers the sweeps' and whites' χ² beyond chance
+    (F-test of its three parameters against plain power laws, at the
+    family-wise level), it is a loss, and with it divided out of the sweeps
+    the tone-curve test (:func:`undimmed_sweeps_tone_p`) finds nothing at
+    the family-wise level. Returns (explained, why, the fit).
+    """
+    fit = fit_power_limit(context) if fit is None else fit
+    if fit is None:
+        return False, "too few sweep levels or no white to fit a power limit on", None
+    level = critical_p(family_size(context.apl_testable))
+    extra = max(fit.dof_power + 1 - fit.dof, 1)
+    f_gain = ((fit.chi2_power - fit.chi2) / extra) / max(fit.chi2 / max(fit.dof, 1), 1.0)
+    p_gain = f_sf(max(f_gain, 0.0), extra, max(fit.dof, 1))
+    p_left = undimmed_sweeps_tone_p(context, fit)
+    explained = bool(p_gain <= level and p_left > level and fit.loss > 0)
+    why = (f"{fit.describe()} bends the sweeps as measured: with its load gain divided out no "
+           f"sweep departs from a power law (tone test p {p_left:.2g}; the gain lowers the "
+           f"sweeps' χ² from {fit.chi2_power:.0f} to {fit.chi2:.0f}, p {p_gain:.2g})")
+    return explained, why, fit
+
+
+def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = None,
+                      with_black: bool = True):
+    """The extended model whose interaction term is the fitted power limit (module doc).
+
+    Power laws of the undimmed outputs, the measured primaries' chromaticities
+    at their undimmed luminances, the black, and one load gain
+    (:class:`~workbench.display.extended.ChannelInteraction` with
+    ``load_weights``): it reproduces the dimmed full-drive primaries, the
+    sweeps' bend and the white with one cause. ``with_black`` False (no
+    ``black-offset`` finding): the black is zero, as in the paper's model,
+    rather than the black rows' noise.
+
+    Raises
+    ------
+    InputError
+        Where the rows cannot fit a power limit.
+    """
+    from workbench.diagnostics.evidence import xy_of
+    from workbench.display.extended import ChannelInteraction, ExtendedDisplay
+    from workbench.display.tone_curves import PowerCurve
+    from workbench.errors import InputError
+
+    fit = fit_power_limit(context) if fit is None else fit
+    if fit is None:
+        raise InputError("a power limit needs every channel swept at 8 levels or more and a white")
+    full = np.array([s.full_XYZ for s in context.sweeps])
+    black = (context.black + fit.black_offset_Y * context.white / context.white[1]
+             if with_black else np.zeros(3))
+    return ExtendedDisplay(
+        black=black, white=context.white, primaries_xy=xy_of(full),
+        primaries_Y=np.asarray(fit.full_Y), tone=tuple(PowerCurve(g) for g in fit.gamma),
+        interaction=ChannelInteraction(amount=fit.loss, knee=fit.knee, exponent=fit.shape,
+                                       load_weights=tuple(float(w) for w in fit.weights)),
+        components=(("black-offset",) if with_black else ()) + ("channel-interaction",))
