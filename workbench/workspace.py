@@ -36,7 +36,8 @@ from pathlib import Path
 from workbench.errors import WorkbenchError
 
 __all__ = ["EVENTS", "DEFAULT_SOURCES", "MEASUREMENT_STATUSES", "LoadedPath", "MeasurementState",
-           "Workspace", "load_path", "is_profile_file", "unfinished_journal"]
+           "Workspace", "load_path", "is_profile_file", "unfinished_journal", "measurement_directory",
+           "write_follow_up_plan"]
 
 EVENTS = ("session-changed", "diagnosis-changed", "profile-changed", "sources-changed",
           "measurement-changed")
@@ -169,6 +170,43 @@ def unfinished_journal(directory: str | Path):
     journal = read_journal(path)
     ok = {i for i, r in journal.latest().items() if r.ok}
     return journal if len(ok) < len(journal.header.plan) else None
+
+
+def measurement_directory(path: str | Path | None) -> Path | None:
+    """The measurement directory (the one holding the journal) that ``path`` was read from, or None.
+
+    ``path`` is what was opened: a measurement directory, or its ``session.csv``
+    or ``session.ti3``. A follow-up can be measured into such a directory
+    (``measure --add-plan``); any other file has none.
+    """
+    from workbench.measurement.runner import JOURNAL_NAME, SESSION_CSV_NAME, SESSION_TI3_NAME
+
+    if path is None:
+        return None
+    path = Path(path)
+    directory = path if path.is_dir() else (path.parent if path.name in (SESSION_CSV_NAME, SESSION_TI3_NAME)
+                                            else None)
+    return directory if directory is not None and (directory / JOURNAL_NAME).is_file() else None
+
+
+def write_follow_up_plan(follow_up, session_path: str | Path | None) -> tuple[Path, Path | None]:
+    """Write ``follow_up`` (:class:`~workbench.diagnostics.follow_up.FollowUp`) as a plan file.
+
+    Returns ``(plan file, measurement directory)``: in the session's
+    measurement directory as ``follow-up-N.csv`` (the first N free) where the
+    session has one (it is then measured into it); otherwise in the temporary
+    directory (never beside a data file that is not ours), with None.
+    """
+    import tempfile
+
+    directory = measurement_directory(session_path)
+    if directory is None:
+        stem = Path(session_path).stem if session_path else "session"
+        return follow_up.write(Path(tempfile.gettempdir()) / f"vr-workbench-follow-up-{stem}.csv"), None
+    number = 1
+    while (directory / f"follow-up-{number}.csv").exists():
+        number += 1
+    return follow_up.write(directory / f"follow-up-{number}.csv"), directory
 
 
 class Workspace:

@@ -26,6 +26,11 @@ def register(subparsers) -> None:
     parser.add_argument("--export", metavar="PROFILE",
                         help="write the extended model's profile (the baseline's if nothing was found)")
     parser.add_argument("--report", metavar="FILE.html", help="write a self-contained HTML report")
+    parser.add_argument("--follow-up", metavar="FILE.csv",
+                        help="write the smallest follow-up measurement that identifies what the diagnosis "
+                             "left unidentified, as a plan file (kind,r,g,b[,window,sr,sg,sb]; header only "
+                             "when nothing is left), and print its summary; measure it into the session's "
+                             "directory with measure --add-plan FILE.csv --out DIR")
     parser.set_defaults(handler=_diagnose)
 
     predict = subparsers.add_parser(
@@ -184,8 +189,16 @@ def _diagnose(args) -> int:
         raise InputError(f"{args.session}: no display model can be fitted (no full-field sweep "
                          "of each channel), so there is no profile or report to write; measure "
                          "plan 'paper+apl', or drop --export/--report")
+    follow_up = None
+    if args.follow_up:
+        from workbench.diagnostics.follow_up import propose_follow_up
+
+        follow_up = propose_follow_up(diagnosis)
     if args.json:
-        json.dump(diagnosis.to_json(), sys.stdout, indent=1)
+        document = diagnosis.to_json()
+        if follow_up is not None:
+            document["follow_up"] = follow_up.to_json()
+        json.dump(document, sys.stdout, indent=1)
         print()
     elif load_only:
         _print_load_only(diagnosis)
@@ -199,7 +212,23 @@ def _diagnose(args) -> int:
 
         path = write_report(diagnosis, args.report)
         print(f"wrote report {path}", file=sys.stderr)
+    if follow_up is not None:
+        _write_follow_up(follow_up, args)
     return 0
+
+
+def _write_follow_up(follow_up, args) -> None:
+    """Write the follow-up plan file and say what it holds (stdout, or stderr beside --json)."""
+    path = follow_up.write(args.follow_up)
+    out = sys.stderr if args.json else sys.stdout
+    for line in follow_up.lines():
+        print(f"follow-up {line}" if not line.startswith("  ") else f"          {line.strip()}", file=out)
+    if follow_up.patches:
+        where = args.session if Path(args.session).is_dir() else "DIR"
+        print(f"wrote follow-up plan {path} ({follow_up.patch_count} patches); measure it into the "
+              f"session with: python -m workbench measure ... --out {where} --add-plan {path}", file=out)
+    else:
+        print(f"wrote follow-up plan {path}: the header only, nothing to measure", file=out)
 
 
 def _read_triplets(what: str, example: str) -> np.ndarray:

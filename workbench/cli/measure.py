@@ -5,7 +5,7 @@
     vr-workbench measure (--simulate [--effect ID[:MAGNITUDE]]... [--time-scale S] | --port DEVICE|auto)
                          [--display simulated|window[:SCREEN]|tcp:HOST:PORT]
                          [--plan paper|quick|apl|paper+apl|paper+greys|authors-2024 | --plan-file FILE]
-                         [--seed N] --out DIR [--resume]
+                         [--seed N] --out DIR [--resume | --add-plan FILE]
 
 Writes ``DIR/journal.jsonl`` as it goes (one fsynced line per patch), then
 ``DIR/session.csv`` and ``DIR/session.ti3``; shows a progress bar on stderr
@@ -24,6 +24,18 @@ without ``--seed`` a fresh noise seed is drawn), and the journal keeps it.
 A resumed simulation draws its noise from ``SeedSequence([seed, k])`` for
 its k-th resume, recorded in the journal's resume record, so that it does not
 repeat the noise of the measurements already made.
+
+``--add-plan FILE`` measures the patches of a plan file into the finished
+session in ``--out DIR`` (the follow-up ``diagnose DIR --follow-up FILE``
+proposes): the journal's resume machinery appends them (a resume record
+naming them, fsynced before the first is measured, then one line per
+patch), so a run killed in the middle of the follow-up is continued by
+``--resume``; ``session.csv`` and ``session.ti3`` are then rewritten with
+every measurement, and ``diagnose DIR`` reads them all. It refuses (exit 2)
+a directory without a finished journal, and the same mismatches ``--resume``
+refuses (a real instrument for a simulated session, other effects, another
+instrument serial), and a patch display other than the session's. A
+header-only plan (an empty follow-up) measures nothing and says so.
 
 ``--plan apl`` (or ``paper+apl``) measures APL patches: white and mid grey
 as windows of the field on black and on grey surrounds, for the
@@ -60,6 +72,7 @@ import signal
 import sys
 import threading
 from contextlib import ExitStack, contextmanager
+from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
@@ -74,7 +87,7 @@ from instruments.patch_display import (
 )
 from workbench.errors import InputError, WorkbenchError
 from workbench.measurement.journal import read_journal
-from workbench.measurement.plans import MEASUREMENT_PLANS, measurement_plan, read_plan_file
+from workbench.measurement.plans import EMPTY_PLAN_HINT, MEASUREMENT_PLANS, measurement_plan, read_plan_file
 from workbench.measurement.runner import (
     JOURNAL_NAME,
     MeasurementRun,
@@ -115,6 +128,10 @@ def register(subparsers) -> None:
     plans = parser.add_mutually_exclusive_group()
     plans.add_argument("--plan", choices=sorted(MEASUREMENT_PLANS), help="built-in plan (default paper)")
     plans.add_argument("--plan-file", metavar="FILE", help="CSV plan with columns kind,r,g,b (and optionally window,sr,sg,sb)")
+    plans.add_argument("--add-plan", metavar="FILE",
+                       help="measure this plan file (e.g. diagnose --follow-up's) into the finished session "
+                            "in --out DIR: appended to its journal (crash-safe; --resume continues it), "
+                            "session.csv and session.ti3 rewritten with every measurement")
     parser.add_argument("--seed", type=int, help="seed of the validation colours and, with --simulate, the "
                                                  "instrument noise (default: a fresh one, kept in the journal)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
@@ -180,14 +197,27 @@ def _run(args) -> int:
         raise InputError(f"--time-scale {args.time_scale} is negative; give 0 (no waiting) to 1 (real timing)")
     display_kind, display_address = parse_display(args.display, args.simulate)
     effects = _effects(args.effect)
-    plan = _requested_plan(args)
-    journal = read_journal(f"{args.out}/{JOURNAL_NAME}") if args.resume else None
+    added = None
+    if args.add_plan:
+        added = _plan_to_add(args)
+        if not added.patches:
+            print(f"measure: nothing to measure: {args.add_plan} holds no patches ({EMPTY_PLAN_HINT}); "
+                  f"{args.out} is left as it is")
+            return 0
+        plan, journal = None, _finished_journal(args.out)
+    else:
+        plan = _requested_plan(args)
+        journal = read_journal(f"{args.out}/{JOURNAL_NAME}") if args.resume else None
     settings = {"simulated": bool(args.simulate)}
     if journal is not None:
         _check_resume_settings(journal, args, effects)
         settings = journal.header.settings
         effects = settings.get("effects", effects) if args.simulate else effects
     run_plan = plan if journal is None else journal.header.plan
+    if added is not None:
+        run_plan = journal.header.with_added(added).plan
+        print(f"measure: adding the {len(added)} patches of {args.add_plan} to the {len(journal.header.plan)} "
+              f"of {args.out}", file=sys.stderr)
     noise_seed, noise = _noise_seed(args, run_plan, journal) if args.simulate else (None, None)
 
     ctrl_c = _CtrlCCancels()
@@ -228,7 +258,7 @@ def _run(args) -> int:
             else:
                 details = {"noise_seed": [int(v) for v in noise.entropy]} if simulation else None
                 run = MeasurementRun.resume_session(args.out, display, meter, plan=plan, journal=journal,
-                                                    resume_details=details, **options)
+                                                    resume_details=details, add_plan=added, **options)
             return _drive(run, ctrl_c)
 
     if display_kind == "window":
@@ -241,6 +271,34 @@ def _run(args) -> int:
         print(f"cancelled: run again with --resume --out {args.out} to continue", file=sys.stderr)
         return 130
     return 1 if summary.failed else 0
+
+
+def _plan_to_add(args):
+    """The plan file of ``--add-plan`` (may be empty: a header-only follow-up), after checking the options."""
+    if args.resume:
+        raise InputError("--add-plan adds patches to a finished session and --resume continues an "
+                         "unfinished one: give one of them (a follow-up cut short by a crash is "
+                         f"continued with --resume --out {args.out})")
+    if args.seed is not None:
+        raise InputError("--seed does not apply to --add-plan: the added patches are the plan file's, and "
+                         "a simulation draws fresh noise from the journal's seed, as a resume does; drop --seed")
+    return read_plan_file(args.add_plan, allow_empty=True)
+
+
+def _finished_journal(out_dir):
+    """The journal of the finished session in ``out_dir``; a clear error where there is none."""
+    path = Path(out_dir) / JOURNAL_NAME
+    if not path.is_file():
+        raise InputError(f"--add-plan needs the measurement directory of a finished session, and {out_dir} "
+                         f"holds no {JOURNAL_NAME}; give the --out directory the session was measured into, "
+                         "or measure the plan as a new session with --plan-file")
+    journal = read_journal(path)
+    pending = journal.pending_indices()
+    if pending:
+        raise InputError(f"{path} is not a finished session: {len(pending)} of its {len(journal.header.plan)} "
+                         f"patches have no successful measurement; finish it first with "
+                         f"measure --resume --out {out_dir}, then add the plan")
+    return journal
 
 
 def _noise_seed(args, run_plan, journal):
@@ -278,16 +336,18 @@ def _instrument_error(error: CS2000Error, name: str) -> WorkbenchError:
 
 def _check_resume_settings(journal, args, effects: dict) -> None:
     simulated = bool(journal.header.settings.get("simulated"))
+    resume, again = (("add the plan", "add it") if getattr(args, "add_plan", None)
+                     else ("resume it", "resume"))
     if simulated != bool(args.simulate):
         raise InputError(
             f"{journal.path} was measured {'with --simulate' if simulated else 'with a real CS-2000'}; "
-            f"resume it the same way ({'--simulate' if simulated else '--port DEVICE'})"
+            f"{resume} the same way ({'--simulate' if simulated else '--port DEVICE'})"
         )
     recorded = journal.header.settings.get("effects", {})
     if args.effect and effects != recorded:
         raise InputError(
             f"{journal.path} was simulated with effects {recorded or 'none'}, not {effects}; "
-            "resume without --effect (the journal's effects are used)"
+            f"{again} without --effect (the journal's effects are used)"
         )
 
 

@@ -87,6 +87,11 @@ class CalibrationSetup:
         rehearsing what the window shows when the instrument fails.
     remeasure : tuple of int
         Plan indices to measure again on resume (the newer record wins).
+    add_plan : Path or None
+        A plan file to measure into the finished session in ``out_dir``
+        (``measure --add-plan``: a follow-up of
+        :mod:`workbench.diagnostics.follow_up`); the session's own
+        instrument and effects are used, as on resume.
     """
 
     out_dir: Path
@@ -101,6 +106,7 @@ class CalibrationSetup:
     seed: int | None = None
     faults: tuple = ()
     remeasure: tuple = ()
+    add_plan: Path | None = None
 
     def __post_init__(self):
         simulated = self.instrument == SIMULATED
@@ -197,9 +203,24 @@ def check_tcp_display(host: str, port: int, timeout_s: float = 3.0) -> str:
 
 
 def planned(setup: CalibrationSetup) -> tuple:
-    """``(plan, journal)``: what :func:`open_run` will measure; the journal in ``out_dir`` (resume) or None."""
+    """``(plan, journal)``: what :func:`open_run` will measure; the journal in ``out_dir`` (resume) or None.
+
+    With ``setup.add_plan`` the plan is the session's with the plan file's
+    patches after it.
+
+    Raises
+    ------
+    WorkbenchError
+        With ``add_plan``: if ``out_dir`` holds no journal, or the plan file cannot be read.
+    """
     path = Path(setup.out_dir) / JOURNAL_NAME
     journal = read_journal(path) if path.is_file() else None
+    if setup.add_plan is not None:
+        if journal is None:
+            raise InputError(f"{setup.out_dir} holds no {JOURNAL_NAME}: a follow-up is measured into the "
+                             "directory of a finished session; choose that directory, or measure the plan "
+                             "file as a new session")
+        return journal.header.with_added(read_plan_file(setup.add_plan)).plan, journal
     return (setup.plan() if journal is None else journal.header.plan), journal
 
 
@@ -262,8 +283,9 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
             run = MeasurementRun.start(out_dir, plan, display, meter, settings=settings, **options)
         else:
             details = {"noise_seed": [int(v) for v in noise.entropy]} if simulation else None
+            added = None if setup.add_plan is None else read_plan_file(setup.add_plan)
             run = MeasurementRun.resume_session(out_dir, display, meter, journal=journal, resume_details=details,
-                                                remeasure=setup.remeasure, **options)
+                                                remeasure=setup.remeasure, add_plan=added, **options)
         yield run
 
 

@@ -132,6 +132,8 @@ class MainWindow(QMainWindow):
                 page = _make_page(module, name, title, workspace)
                 self.pages[key] = page
                 self.stack.addWidget(page)
+                if key != "calibrate":
+                    self._wire(key, page)
             if i:
                 arrow = QLabel("→")
                 arrow.setStyleSheet("color:#888;font-size:14px")
@@ -245,7 +247,18 @@ class MainWindow(QMainWindow):
             placeholder.deleteLater()
             self.stack.setCurrentIndex(current)
             self.pages[key] = page
+            self._wire(key, page)
         return self.pages[key]
+
+    def _wire(self, key: str, page) -> None:
+        """Connect what a page asks of the others (pages built later are wired when built)."""
+        if key == "diagnose" and hasattr(page, "follow_up_requested"):
+            page.follow_up_requested.connect(self.measure_follow_up)
+
+    def measure_follow_up(self, plan_path, out_dir) -> str:
+        """Measure a follow-up plan on the Calibrate page (into ``out_dir``; a new session without one)."""
+        self.show_page("calibrate")
+        return self.pages["calibrate"].measure_follow_up(plan_path, out_dir)
 
     def _build_next_page(self) -> None:
         if self._pending and not getattr(self, "_shut_down", False):

@@ -24,6 +24,12 @@ A journal is a text file of JSON lines (``journal.jsonl``):
 
 3. a **resume** record each time ``--resume`` picks the session up again
    (with whatever the resuming run adds, e.g. a simulation's noise seed).
+   A resume record that carries ``"add_plan": {"name": ..., "patches": [...]}``
+   (``measure --add-plan``: a follow-up measured into a finished session)
+   makes the plan grow by those patches, numbered on from the last index;
+   :attr:`Journal.header` is then the header with the grown plan (the file's
+   header line is never rewritten), so a ``--resume`` after a crash in the
+   follow-up measures what is left of it like any other pending patch.
 
 Nothing is ever rewritten in place. A crash can leave a truncated last line;
 :func:`read_journal` ignores it (and reports that it did), and
@@ -48,7 +54,7 @@ import json
 import logging
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -73,6 +79,7 @@ __all__ = [
     "JournalBusyError",
     "read_journal",
     "journal_to_session",
+    "added_plan_json",
 ]
 
 JOURNAL_FORMAT = "vr-workbench-journal/1"
@@ -86,6 +93,22 @@ _LOG = logging.getLogger(__name__)
 
 class JournalBusyError(WorkbenchError):
     """Another process is writing the journal (or wrote to it while this one started)."""
+
+
+def _patch_entry(patch: Patch) -> list:
+    """A patch as the journal writes it: ``[kind, r, g, b]``, or ``[kind, r, g, b, window, sr, sg, sb]``."""
+    return [patch.kind, *patch.rgb, patch.window, *patch.surround] if patch.is_apl else [patch.kind, *patch.rgb]
+
+
+def _patch_of(entry) -> Patch:
+    """The patch of a journal entry (:func:`_patch_entry`)."""
+    return Patch(str(entry[0]), tuple(int(v) for v in entry[1:4]),
+                 *((float(entry[4]), tuple(int(v) for v in entry[5:8])) if len(entry) == 8 else ()))
+
+
+def added_plan_json(plan: MeasurementPlan) -> dict:
+    """The ``add_plan`` field of a resume record that adds ``plan``'s patches to a session."""
+    return {"name": plan.name, "patches": [_patch_entry(p) for p in plan.patches]}
 
 
 def _utc_iso(epoch_s: float) -> str:
@@ -134,20 +157,26 @@ class JournalHeader:
             "plan": {
                 "name": self.plan.name,
                 "seed": self.plan.seed,
-                "patches": [[p.kind, *p.rgb, p.window, *p.surround] if p.is_apl else [p.kind, *p.rgb]
-                            for p in self.plan.patches],
+                "patches": [_patch_entry(p) for p in self.plan.patches],
             },
             "instrument": self.instrument,
             "display": self.display,
             "settings": self.settings,
         }
 
+    def with_added(self, added: MeasurementPlan) -> "JournalHeader":
+        """This header with ``added``'s patches appended to its plan (``measure --add-plan``).
+
+        The plan keeps its seed; its name becomes ``"<plan> + <added file name>"``.
+        """
+        name = f"{self.plan.name} + {Path(added.name).name}"
+        return replace(self, plan=MeasurementPlan(name, self.plan.patches + tuple(added.patches),
+                                                  self.plan.seed))
+
     @classmethod
     def from_json(cls, data: dict) -> "JournalHeader":
         plan = data["plan"]
-        patches = tuple(Patch(str(entry[0]), tuple(int(v) for v in entry[1:4]),
-                              *((float(entry[4]), tuple(int(v) for v in entry[5:8])) if len(entry) == 8 else ()))
-                        for entry in plan["patches"])
+        patches = tuple(_patch_of(entry) for entry in plan["patches"])
         return cls(
             plan=MeasurementPlan(str(plan["name"]), patches, plan.get("seed")),
             instrument=dict(data.get("instrument") or {}),
@@ -332,6 +361,16 @@ class Journal:
         latest = self.latest()
         return [r for r in self.records if latest[r.index] is not r]
 
+    def pending_indices(self) -> list:
+        """Plan indices without a successful measurement (never measured, or the latest attempt failed)."""
+        latest = self.latest()
+        return [i for i in range(len(self.header.plan)) if i not in latest or not latest[i].ok]
+
+    @property
+    def additions(self) -> tuple:
+        """The resume records that added patches to the plan (``measure --add-plan``), in file order."""
+        return tuple(r for r in self.resumes if r.get("add_plan"))
+
     def session_end_s(self) -> float:
         """Session time at which the last journaled patch ended (0 for none)."""
         return max((r.t_s + r.duration_s for r in self.records), default=0.0)
@@ -375,6 +414,11 @@ def read_journal(path: str | os.PathLike) -> Journal:
                     raise ValueError(f"patch index {record.index} outside the plan's {len(header.plan)} patches")
                 records.append(record)
             elif kind == "resume":
+                if entry.get("add_plan"):
+                    added = entry["add_plan"]
+                    patches = tuple(_patch_of(p) for p in added["patches"])
+                    header = header.with_added(MeasurementPlan(str(added.get("name", "added plan")),
+                                                               patches, None))
                 resumes.append(entry)
             else:
                 raise ValueError(f"unknown record type {kind!r}")
@@ -439,7 +483,10 @@ class JournalWriter:
         journal : Journal
             As :func:`read_journal` returned it; the file must not have changed since.
         resume_details : dict, optional
-            More fields for the resume record (JSON-able), e.g. a simulation's noise seed.
+            More fields for the resume record (JSON-able), e.g. a simulation's
+            noise seed, or ``add_plan`` (:func:`added_plan_json`): patches the
+            session's plan grows by (the record is on disk, fsynced, before
+            the first of them is measured).
 
         Raises
         ------

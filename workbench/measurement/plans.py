@@ -61,6 +61,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench.errors import InputError, SpectrumFileError
+from workbench.fileio import atomic_writer
 from workbench.session import SESSION_KINDS
 
 __all__ = [
@@ -84,6 +85,8 @@ __all__ = [
     "measurement_plan_paper",
     "measurement_plan_quick",
     "read_plan_file",
+    "write_plan_file",
+    "EMPTY_PLAN_HINT",
 ]
 
 DRIFT_REFERENCE_INTERVAL = 25
@@ -375,7 +378,12 @@ def measurement_plan(name: str, seed: int) -> MeasurementPlan:
     return build(int(seed))
 
 
-def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
+EMPTY_PLAN_HINT = ("a follow-up plan written by `diagnose --follow-up` has only its header when "
+                   "the diagnosis left nothing a measurement could identify: there is nothing to measure")
+"""What a header-only plan file means, for the messages that meet one."""
+
+
+def read_plan_file(path: str | os.PathLike, allow_empty: bool = False) -> MeasurementPlan:
     """Read a plan from a CSV file with a header ``kind,r,g,b`` (any order, any case).
 
     Parameters
@@ -385,6 +393,9 @@ def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
         kind, ``r,g,b`` are integer DAC values 0..255; optional ``window`` (the
         patch's fraction of the field, default 1) and ``sr,sg,sb`` (the
         surround's DAC values, default 0) make APL patches.
+    allow_empty : bool
+        Return a plan without patches for a file that holds only its header
+        (an empty follow-up, :func:`write_plan_file`) instead of refusing it.
 
     Returns
     -------
@@ -446,6 +457,28 @@ def read_plan_file(path: str | os.PathLike) -> MeasurementPlan:
                                             "write the patch's fraction of the field, 0 < window <= 1")
             surround = tuple(rgb[3:]) if surround_columns else (0, 0, 0)
             patches.append(Patch(kind, tuple(rgb[:3]), window, surround))
-    if not patches:
-        raise SpectrumFileError(path, None, "the file has a header but no patches", "add one row kind,r,g,b per patch")
+    if not patches and not allow_empty:
+        raise SpectrumFileError(path, None, "the file has a header but no patches, so there is nothing to measure",
+                                f"add one row kind,r,g,b per patch ({EMPTY_PLAN_HINT})")
     return MeasurementPlan(str(path), tuple(patches), None)
+
+
+def write_plan_file(patches, path: str | os.PathLike) -> Path:
+    """Write ``patches`` (a plan or a sequence of :class:`Patch`) as a plan file; returns the path.
+
+    The columns are ``kind,r,g,b``, and ``window,sr,sg,sb`` too where a
+    patch is shown as a window or on a lit surround; :func:`read_plan_file`
+    reads the file back to the same patches. No patches: a header-only file
+    (which :func:`read_plan_file` reads only with ``allow_empty``). Written
+    atomically: a reader never sees half a plan.
+    """
+    patches = tuple(patches.patches if isinstance(patches, MeasurementPlan) else patches)
+    apl = any(p.is_apl or any(p.surround) for p in patches)
+    path = Path(path)
+    with atomic_writer(path, newline="") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(["kind", "r", "g", "b", *(("window", "sr", "sg", "sb") if apl else ())])
+        for patch in patches:
+            writer.writerow([patch.kind, *(int(v) for v in patch.rgb),
+                             *((f"{patch.window:g}", *(int(v) for v in patch.surround)) if apl else ())])
+    return path

@@ -62,6 +62,7 @@ from workbench.measurement.journal import (
     JournalHeader,
     JournalRecord,
     JournalWriter,
+    added_plan_json,
     journal_to_session,
     read_journal,
 )
@@ -364,8 +365,8 @@ class MeasurementRun:
     def resume_session(cls, out_dir, display, meter: Meter, *, plan: MeasurementPlan | None = None,
                        journal: Journal | None = None, resume_details: dict | None = None,
                        clock: Callable[[JournalHeader, Journal | None], SessionClock] | None = None,
-                       remeasure=(), **options) -> "MeasurementRun":
-        """Continue the session journaled in ``out_dir``.
+                       remeasure=(), add_plan: MeasurementPlan | None = None, **options) -> "MeasurementRun":
+        """Continue the session journaled in ``out_dir`` (or add patches to a finished one).
 
         Parameters
         ----------
@@ -384,6 +385,14 @@ class MeasurementRun:
             Plan indices to measure again even though they were measured; the
             journal keeps the earlier record, the new one supersedes it, and
             the resume record lists them as ``"remeasure"``.
+        add_plan : MeasurementPlan, optional
+            Patches to add to a **finished** session (``measure --add-plan``,
+            a follow-up of :mod:`workbench.diagnostics.follow_up`): the resume
+            record carries them (on disk before the first is measured), the
+            plan grows by them, and they are measured like pending patches,
+            so a crash in the follow-up is continued by a plain resume. The
+            patch display must describe itself as the journal's did (the
+            same panel through the same runtime).
         **options
             As for :meth:`start`.
 
@@ -391,7 +400,9 @@ class MeasurementRun:
         ------
         InputError
             If ``plan`` differs from the journal's, or the instrument is
-            another one, or ``remeasure`` names an index outside the plan.
+            another one, or ``remeasure`` names an index outside the plan;
+            with ``add_plan``: if the session is unfinished, the plan to add
+            is empty, or the patch display is another one.
         JournalBusyError
             If another run is writing the journal.
         """
@@ -419,6 +430,10 @@ class MeasurementRun:
             raise InputError(f"cannot re-measure journal index {outside[0]}: the plan of {journal.path} "
                              f"has indices 0 to {len(header.plan) - 1}")
         details = {**(resume_details or {}), **({"remeasure": remeasure} if remeasure else {})}
+        if add_plan is not None:
+            _check_addition(journal, add_plan, display)
+            details["add_plan"] = added_plan_json(add_plan)
+            header = header.with_added(add_plan)
         writer = JournalWriter.append_to(journal, details or None)
         make_clock = clock or (lambda h, j: WallSessionClock(h.started_epoch_s))
         return cls(out_dir, header, journal, writer, display, meter, make_clock(header, journal),
@@ -605,6 +620,27 @@ class MeasurementRun:
         ti3_path = write_session_ti3(session, self.out_dir / SESSION_TI3_NAME,
                                      instrument=f"Konica Minolta {instrument}".strip())
         return csv_path, ti3_path
+
+
+def _check_addition(journal: Journal, add_plan: MeasurementPlan, display) -> None:
+    """Refuse to add ``add_plan`` to ``journal`` unless the session is finished and shown the same way."""
+    directory = journal.path.parent
+    if not add_plan.patches:
+        raise InputError(f"the plan to add ({add_plan.name}) holds no patches: nothing to measure")
+    pending = journal.pending_indices()
+    if pending:
+        raise InputError(
+            f"{journal.path} is not a finished session: {len(pending)} of its {len(journal.header.plan)} "
+            f"patches have no successful measurement (the first: journal index {pending[0]}); finish "
+            f"it first (measure --resume --out {directory}, or Resume on the Calibrate page), then add "
+            "the plan")
+    shown_on = display.describe()
+    if journal.header.display and shown_on != journal.header.display:
+        raise InputError(
+            f"{journal.path} was measured on {journal.header.display!r}, and the patches would now be "
+            f"shown on {shown_on!r}: a follow-up must be shown the way the session was (the same panel "
+            "through the same runtime), or its rows do not belong in the session; use the session's "
+            "--display (and --effect), or measure the plan as a new session with --plan-file")
 
 
 def _identity(meter: Meter) -> dict:

@@ -9,6 +9,12 @@ knows dark patches are slow), the live sweep and white-reference plots, and
 the table of patches (failures with their reason; re-measure any of them).
 When a run finishes, the session is read and diagnosed off the GUI thread and
 put into the workspace, which fills the other pages.
+
+:meth:`CalibratePage.measure_follow_up` measures a follow-up plan (the Fit &
+diagnose page's "Measure the N patches that identify this") into the
+finished session's directory with the session's setup, as ``measure
+--add-plan`` does; a session without a measurement directory gets the plan
+file put into the form (plan "from a file…") for a new session instead.
 """
 
 from __future__ import annotations
@@ -30,7 +36,7 @@ from PySide6.QtWidgets import (
 )
 
 from workbench.errors import WorkbenchError
-from workbench.gui.calibration_setup import CalibrationSetup, planned
+from workbench.gui.calibration_setup import SIMULATED, CalibrationSetup, planned
 from workbench.gui.diagnosis_views import XYZ_to_srgb8
 from workbench.gui.measure_window import WorkerPatchDisplay
 from workbench.gui.widgets.calibration_form import CalibrationForm
@@ -224,7 +230,50 @@ class CalibratePage(QWidget):
         if self.running or not indices:
             return
         base = self._setup or self.form.setup()
-        self.start(replace(base, remeasure=tuple(int(i) for i in indices)))
+        self.start(replace(base, remeasure=tuple(int(i) for i in indices), add_plan=None))
+
+    def measure_follow_up(self, plan_path, out_dir=None) -> str:
+        """Measure the plan file ``plan_path`` into the finished session in ``out_dir``.
+
+        The setup is the form's with the session's own instrument kind
+        (simulated or not; a simulation's effects come from its journal) and,
+        for a simulated session shown on the simulated headset, that display:
+        the follow-up must be shown as the session was (the runner refuses
+        another display, naming both). Without ``out_dir`` (the session has no
+        measurement directory) the plan file is put into the form as a new
+        session's plan, and nothing starts. Returns ``"started"``,
+        ``"prefilled"`` or ``"refused"`` (the message says why).
+        """
+        from workbench.measurement.journal import read_journal
+        from workbench.measurement.runner import JOURNAL_NAME
+
+        if out_dir is None:
+            self.form.plan_file.setText(str(plan_path))
+            self.form.plan.setCurrentIndex(self.form.plan.findData("file"))
+            self.message.setText(f"The follow-up plan {plan_path} is set as this calibration's plan file: the "
+                                 "open session has no measurement directory to add it to, so it is measured "
+                                 "as a new session. Check the instrument, the display and the output "
+                                 "directory, then Start.")
+            return "prefilled"
+        if self.running:
+            self._show_error("a calibration is running: measure the follow-up when it has ended")
+            return "refused"
+        try:
+            journal = read_journal(f"{out_dir}/{JOURNAL_NAME}")
+            simulated = bool(journal.header.settings.get("simulated"))
+            changes = dict(out_dir=out_dir, add_plan=plan_path, effects={},
+                           instrument=SIMULATED if simulated else self.form.instrument.currentData())
+            if simulated and " + " not in journal.header.display:  # shown on the simulated headset alone
+                changes["display"] = "simulated"
+            elif not simulated and self.form.instrument.currentData() == SIMULATED:
+                changes["instrument"] = "auto"
+            setup = self.form.setup(**changes)
+        except WorkbenchError as error:
+            self._show_error(f"cannot measure the follow-up: {error}")
+            return "refused"
+        self.form.out_dir.setText(str(out_dir))
+        self.start(setup)
+        return "started" if self.running else "refused"
 
     def stop(self) -> None:
         """Cancel a run and wait for every worker (teardown)."""

@@ -6,15 +6,23 @@ Shows whatever :func:`workbench.diagnostics.diagnose` returned (through
 per-channel sweep fits with residuals (baseline vs extended), additivity,
 chromaticity vs drive, the white references over time, the validation table
 and the ΔE00 histograms. "Open report" writes the HTML report and opens it.
+
+Where the diagnosis leaves something a measurement would identify, the card
+of that finding carries "Measure the N patches that identify this — about M
+min" (the proposal is :func:`workbench.diagnostics.follow_up.propose_follow_up`'s):
+it writes the follow-up as a plan file and asks (``follow_up_requested``) for
+it to be measured — into the session's measurement directory with the same
+setup where the session has one, else as a new session from the plan file.
 """
 
 from __future__ import annotations
 
 import html
+import logging
 import tempfile
 from pathlib import Path
 
-from PySide6.QtCore import QTimer, QUrl, Qt
+from PySide6.QtCore import QTimer, QUrl, Qt, Signal
 from PySide6.QtGui import QDesktopServices
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QPushButton, QSplitter, QTextBrowser, QVBoxLayout, QWidget
 
@@ -25,11 +33,21 @@ from workbench.gui.widgets.validation_table import ValidationHistogram, Validati
 
 __all__ = ["DiagnosePage"]
 
+_LOG = logging.getLogger(__name__)
+
 
 class DiagnosePage(QWidget):
-    """The diagnosis of the workspace's session; updates on ``diagnosis-changed``."""
+    """The diagnosis of the workspace's session; updates on ``diagnosis-changed``.
+
+    Signals
+    -------
+    follow_up_requested(object, object)
+        The follow-up's plan file (a Path) and the measurement directory to
+        measure it into (a Path), or None where the session has none.
+    """
 
     title = "Fit & diagnose"
+    follow_up_requested = Signal(object, object)
 
     def __init__(self, workspace, parent=None):
         super().__init__(parent)
@@ -44,6 +62,7 @@ class DiagnosePage(QWidget):
         self.report_button.setToolTip("write the HTML report of this diagnosis and open it in the browser")
         self.report_button.clicked.connect(self.open_report)
         self.report_path: Path | None = None
+        self.follow_up = None
         self._stages: list = []
         self._staged = None
         self.cards = FindingCards()
@@ -81,11 +100,42 @@ class DiagnosePage(QWidget):
             self.summary.setText("<br>".join(f"<b>{key}</b>: {text}" for key, text in views.summary_lines(diagnosis)))
             self.details.setHtml("<br>".join(f"<b>{key}</b>: {html.escape(text)}"
                                              for key, text in views.detail_lines(diagnosis)))
+        self.follow_up = self._propose(diagnosis)
+        follow_up = self.follow_up
+        if follow_up is not None and follow_up.patches:
+            self.cards.set_action(follow_up.serves, follow_up.headline(), "\n".join(follow_up.lines()),
+                                  self.measure_follow_up)
+        else:
+            self.cards.set_action(None, "", "", None)
         # One part per event-loop turn, so that the window keeps responding while they are drawn.
         self._stages = [self.table.show_diagnosis, self.histogram.show_diagnosis, self.fits.show_sweeps,
                         self.fits.show_others, self.cards.show_diagnosis]
         self._staged = diagnosis
         self._next_stage()
+
+    @staticmethod
+    def _propose(diagnosis):
+        """The follow-up of ``diagnosis`` (None without one, or where it cannot be proposed)."""
+        if diagnosis is None:
+            return None
+        from workbench.diagnostics.follow_up import propose_follow_up
+
+        try:
+            return propose_follow_up(diagnosis)
+        except Exception:  # noqa: BLE001 - the page still shows the diagnosis without the button
+            _LOG.warning("no follow-up could be proposed for this diagnosis", exc_info=True)
+            return None
+
+    def measure_follow_up(self) -> tuple:
+        """Write the follow-up plan file and ask for it to be measured; returns ``(plan file, directory)``."""
+        from workbench.workspace import write_follow_up_plan
+
+        if self.follow_up is None or not self.follow_up.patches:
+            return None, None
+        path, directory = write_follow_up_plan(self.follow_up, self.workspace.session_path)
+        _LOG.info("follow-up plan %s: %s", path, self.follow_up.summary())
+        self.follow_up_requested.emit(path, directory)
+        return path, directory
 
     def _next_stage(self) -> None:
         if self._stages:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from PySide6.QtWidgets import QFrame, QLabel, QScrollArea, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QFrame, QLabel, QPushButton, QScrollArea, QVBoxLayout, QWidget
 
 from workbench.gui import diagnosis_views as views
 from workbench.gui.widgets.plot_view import ViewPlot
@@ -33,6 +33,12 @@ class FindingCard(QFrame):
             self.plot.setMinimumHeight(170)
             self.plot.show_view(card.plot)
             layout.addWidget(self.plot)
+        self.action = None
+
+    def add_action(self, button: QPushButton) -> None:
+        """Put ``button`` (e.g. "Measure the N patches that identify this") at the foot of the card."""
+        self.action = button
+        self.layout().addWidget(button)
 
 
 class FindingCards(QScrollArea):
@@ -43,7 +49,14 @@ class FindingCards(QScrollArea):
         self.setWidgetResizable(True)
         self.setMinimumWidth(330)
         self.cards: list = []
+        self.action_button: QPushButton | None = None
+        self._action = None
         self._set_body(QLabel("No diagnosis yet: calibrate, or open a session (File ▸ Open)."))
+
+    def set_action(self, effects, text: str, tooltip: str, callback) -> None:
+        """On the next :meth:`show_diagnosis`, a button ``text`` on the card of the first finding
+        among ``effects`` (above the cards where no card is one of them); None: no button."""
+        self._action = None if effects is None else (tuple(effects), text, tooltip, callback)
 
     def _set_body(self, *widgets) -> None:
         old = self.takeWidget()  # deleted by Qt now, not whenever Python collects it
@@ -62,7 +75,21 @@ class FindingCards(QScrollArea):
             self._set_body(QLabel("No diagnosis yet: calibrate, or open a session (File ▸ Open)."))
             return
         self.cards = [FindingCard(card) for card in views.finding_cards(diagnosis)]
+        self.action_button = None
+        standalone = []
+        if self._action is not None:
+            effects, text, tooltip, callback = self._action
+            self.action_button = QPushButton(text)
+            self.action_button.setObjectName("follow-up-button")
+            self.action_button.setToolTip(tooltip)
+            self.action_button.clicked.connect(lambda checked=False: callback())
+            card = next((c for c in self.cards if c.card.effect in effects), None)
+            if card is not None:
+                card.add_action(self.action_button)
+            else:
+                standalone.append(self.action_button)
         if not self.cards:
-            self._set_body(QLabel("No finding beyond noise: the paper's model is adequate for this display."))
+            self._set_body(*standalone, QLabel("No finding beyond noise: the paper's model is adequate for "
+                                               "this display."))
             return
-        self._set_body(*self.cards)
+        self._set_body(*standalone, *self.cards)
