@@ -175,7 +175,9 @@ def grey_ramp_model(session: Session, white: np.ndarray | None = None,
     interaction = _axis_ratio(session, p, tone) if with_sweeps else None
     components = ("black-offset", GREY_RAMP_COMPONENT) + (
         ("channel-interaction",) if interaction is not None else ())
-    return ExtendedDisplay(black=p.black, white=white, primaries_xy=np.column_stack([x, y]),
+    # a black read below zero is noise about none (a display emits no negative light)
+    return ExtendedDisplay(black=np.maximum(p.black, 0.0), white=white,
+                           primaries_xy=np.column_stack([x, y]),
                            primaries_Y=full[1], tone=tone, interaction=interaction,
                            components=components)
 

@@ -454,10 +454,124 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
                    "as one gain on every channel (the channels' own shortfalls "
                    f"{', '.join(f'{100 * a:.1f}' for a in common.amounts)} % against "
                    f"{100 * (1 - common.gain):.1f} % common: a backlight or a power limit)"))
-    return _result("channel-interaction", statistic, standard_error, p, evidence,
-                   {"white_over_sum": ratio.tolist(), "chi2": chi2,
-                    "common_gain_chi2": common.chi2, "common_gain_p": common.p_value,
-                    "channel_specific": common.channel_specific}, z=z_of_chi2(chi2, 3))
+    z = z_of_chi2(chi2, 3)
+    details = {"white_over_sum": ratio.tolist(), "chi2": chi2,
+               "common_gain_chi2": common.chi2, "common_gain_p": common.p_value,
+               "channel_specific": common.channel_specific}
+    greys = greys_against_sum(context)
+    if greys is not None:
+        # two parts, the white and the greys at partial drive: Bonferroni over the two
+        p = min(1.0, 2.0 * min(p, greys.p_value))
+        z = max(z, greys.z) if p < 1e-15 else z_of_p(p)
+        evidence += (f"; the {greys.count} greys at partial drive measure "
+                     f"{100 * greys.ratio:.1f} % of the sum of their channels' sweeps at the same "
+                     f"drive (from {100 * greys.low:.1f} to {100 * greys.high:.1f} %; χ² "
+                     f"{greys.chi2:.1f} on {greys.dof} dof, p {greys.p_value:.2g})")
+        details.update({"greys_over_sum": greys.ratio, "greys_chi2": greys.chi2,
+                        "greys_dof": greys.dof, "greys_p": greys.p_value,
+                        "greys_ratio_range": [greys.low, greys.high]})
+    return _result("channel-interaction", statistic, standard_error, p, evidence, details, z=z)
+
+
+@dataclass(frozen=True)
+class GreysAgainstSum:
+    """Greys at partial drive against the sum of their channels' sweeps at the same drive."""
+
+    count: int
+    chi2: float
+    dof: int
+    p_value: float
+    ratio: float  # mean luminance of the greys over the sums
+    low: float
+    high: float
+
+    @property
+    def z(self) -> float:
+        return z_of_chi2(self.chi2, self.dof)
+
+
+GREY_SUM_MIN_DRIVE = 0.1
+"""Greys below this drive are left out of the additivity test (their noise is the black's)."""
+
+GREY_SUM_MAX_GAP = 16
+"""A grey is tested only where sweep points of every channel lie within this many DAC counts on
+both sides (the sums are interpolated between them, log-log: exact for a local power law)."""
+
+
+def _sweep_at(sweep: ChannelSweep, drive: float) -> np.ndarray | None:
+    """The channel's black-subtracted XYZ at ``drive``, log-log between the neighbouring points."""
+    d = sweep.drive
+    if np.any(np.isclose(d, drive, rtol=0, atol=1e-9)):
+        return sweep.XYZ[int(np.argmin(np.abs(d - drive)))]
+    below, above = d[d < drive], d[d > drive]
+    if not below.size or not above.size:
+        return None
+    lo, hi = int(np.flatnonzero(d == below.max())[0]), int(np.flatnonzero(d == above.min())[0])
+    if 255 * (d[hi] - d[lo]) > 2 * GREY_SUM_MAX_GAP:
+        return None
+    a, b = sweep.XYZ[lo], sweep.XYZ[hi]
+    if np.any(a <= 0) or np.any(b <= 0):
+        u = (drive - d[lo]) / (d[hi] - d[lo])
+        return a + u * (b - a)
+    u = np.log(drive / d[lo]) / np.log(d[hi] / d[lo])
+    return np.exp(np.log(a) + u * (np.log(b) - np.log(a)))
+
+
+def greys_against_sum(context: DiagnosisContext) -> GreysAgainstSum | None:
+    """The greys' additivity test, or None where fewer than three greys can be tested.
+
+    ``G − K − Σ_c (S_c(d) − K)`` for each grey ``G`` at drive ``d`` above
+    :data:`GREY_SUM_MIN_DRIVE`, ``S_c(d)`` the channel's sweep at the same
+    drive; χ² with the full covariance (each grey's and each interpolated
+    sweep point's own, and four times the black's, shared by every grey),
+    F-tested on the noise estimate's dof. A display whose channels add up at
+    full drive but not below (drive-dependent crosstalk, a backlight that
+    follows the mean drive) fails it.
+    """
+    rgb = context.fit.rgb
+    greys = np.flatnonzero(partial_greys(rgb) & ~context.copies
+                           & (rgb[:, 0] / 255.0 > GREY_SUM_MIN_DRIVE))
+    if greys.size < 3 or len(context.sweeps) != 3:
+        return None
+    rows, sums = [], []
+    for index in greys:
+        drive = rgb[index, 0] / 255.0
+        parts = [_sweep_at(s, drive) for s in context.sweeps]
+        if any(part is None for part in parts):
+            continue
+        rows.append(index)
+        sums.append(parts)
+    if len(rows) < 3:
+        return None
+    noise = context.noise
+    grey_XYZ = context.fit.XYZ[rows]
+    sums = np.asarray(sums)  # (n, 3 channels, 3 XYZ)
+    difference = (grey_XYZ - context.black - sums.sum(axis=1)).reshape(-1)
+    n = len(rows)
+    # where drift was corrected, the correction's own uncertainty (a change at an unknown moment
+    # between two references) on the grey and on each sweep point, relative to each
+    drifting = context.drift_found and context.drift is not None and context.fit.t_s is not None
+    grey_u = (context.drift.uncertainty(context.fit.t_s[rows]) if drifting else np.zeros(n))
+    covariance = np.zeros((3 * n, 3 * n))
+    for i in range(n):
+        block = noise.covariance(grey_XYZ[i]) + grey_u[i] ** 2 * np.outer(grey_XYZ[i],
+                                                                           grey_XYZ[i])
+        for sweep, part in zip(context.sweeps, sums[i]):
+            block = block + noise.covariance(part + context.black)
+            if sweep.correction_sd is not None:
+                u = sweep.correction_sd[int(np.argmin(np.abs(sweep.drive
+                                                            - rgb[rows[i], 0] / 255.0)))]
+                block = block + u ** 2 * np.outer(part, part)
+        covariance[3 * i:3 * i + 3, 3 * i:3 * i + 3] = block
+    shared = 4.0 * _mean_covariance(noise, context.black, context.black_count)
+    covariance += np.kron(np.ones((n, n)), shared)
+    chi2 = float(difference @ np.linalg.solve(covariance, difference))
+    dof = 3 * n
+    p = f_sf(chi2 / dof, dof, noise.dof if np.isfinite(noise.dof) else 10 ** 6)
+    ratios = (grey_XYZ[:, 1] - context.black[1]) / sums[:, :, 1].sum(axis=1)
+    return GreysAgainstSum(count=n, chi2=chi2, dof=dof, p_value=float(p),
+                           ratio=float(np.mean(ratios)), low=float(ratios.min()),
+                           high=float(ratios.max()))
 
 
 def _white_against_sum(context: DiagnosisContext):

@@ -236,7 +236,7 @@ def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = Non
     if fit is None:
         raise InputError("a power limit needs every channel swept at 8 levels or more and a white")
     full = np.array([s.full_XYZ for s in context.sweeps])
-    black = (context.black + fit.black_offset_Y * context.white / context.white[1]
+    black = (np.maximum(context.black + fit.black_offset_Y * context.white / context.white[1], 0)
              if with_black else np.zeros(3))
     return ExtendedDisplay(
         black=black, white=context.white, primaries_xy=xy_of(full),

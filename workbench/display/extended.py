@@ -200,14 +200,23 @@ class ExtendedDisplay(DisplayModel):
         drive = np.ones(target.shape[:-1] + (3,))
         output = np.zeros_like(drive)
         simple = self.interaction is None and all(t is None for t in self.chromaticity)
-        for _ in range(1 if simple else self.iterations):
+        # a colour whose iteration stops contracting (a gain that changes steeply with output
+        # makes it oscillate) takes half steps from then on, halving again each time it does
+        step = np.ones(target.shape[:-1] + (1,))
+        last_change = np.full(target.shape[:-1] + (1,), np.inf)
+        iterations = 1 if simple else self.iterations * (
+            3 if self.interaction is not None and self.interaction.axis_ratio is not None else 1)
+        for _ in range(iterations):
             vectors = self._luminance_vectors(drive)
             gain = self._gain(np.clip(output, 0.0, 1.0))
             new = np.linalg.solve(vectors, target[..., None])[..., 0] / gain
             if np.allclose(new, output, rtol=0, atol=1e-10):
                 output = new
                 break
-            output = new
+            change = np.max(np.abs(new - output), axis=-1, keepdims=True)
+            step = np.where(change >= last_change, 0.5 * step, step)
+            last_change = change
+            output = output + step * (new - output)
             drive = self._tone_inverse(np.clip(output, 0.0, 1.0))
         return output
 

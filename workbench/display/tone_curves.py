@@ -330,8 +330,8 @@ def fit_tone_curve(drive, output, form: str = "power") -> ToneCurve:
 def tone_curve_from_parameters(parameters: dict) -> ToneCurve:
     parameters = dict(parameters)
     form = parameters.pop("form")
-    if form == "spline":
-        return SplineCurve(tuple(parameters["drive"]), tuple(parameters["output"]))
+    if form in ("spline", "linear"):
+        return TONE_CURVES[form](tuple(parameters["drive"]), tuple(parameters["output"]))
     return TONE_CURVES[form](**parameters)
 
 
