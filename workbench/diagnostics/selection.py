@@ -43,6 +43,7 @@ from workbench.diagnostics.detectors import (
     family_size,
 )
 from workbench.diagnostics.cross_validation import cross_validated_errors, select_terms
+from workbench.diagnostics.evidence import partial_greys
 from workbench.diagnostics.power_limit import tone_bend_explained
 from workbench.diagnostics.model_choice import (
     ALTERNATIVE_CANDIDATES,
@@ -226,8 +227,48 @@ class Diagnosis:
 def _term_json(effect: str, diagnosis: "Diagnosis") -> dict:
     if effect == APL_EFFECT:
         return {"effect": effect, "term": APL_TERM, "fitted_on": diagnosis.apl.curve.fitted_on}
+    chosen = None if diagnosis.model_choice is None else diagnosis.model_choice.chosen
+    if chosen in ALTERNATIVE_CANDIDATES and effect != "temporal-drift":
+        return {"effect": effect, **_alternative_term(effect, chosen, diagnosis)}
     return {"effect": effect, "term": TERMS[effect],
             "fitted_on": fitted_on(effect, diagnosis.context.fit, diagnosis.context)}
+
+
+def _alternative_term(effect: str, chosen: str, diagnosis: "Diagnosis") -> dict:
+    """What answers ``effect`` in an alternative model (:data:`ALTERNATIVE_CANDIDATES`)."""
+    fit = diagnosis.context.fit
+    sweeps = int(fit.mask("ramp-r", "ramp-g", "ramp-b").sum())
+    whites = int(fit.mask("white").sum())
+    greys = int(np.unique(fit.rgb[partial_greys(fit.rgb), 0]).size)
+    if effect == "black-offset":
+        return {"term": TERMS[effect], "fitted_on": "the black (0, 0, 0) measurement"}
+    if chosen == "power-limit":
+        interaction = diagnosis.extended.interaction
+        knee = (f"past a knee at {100 * interaction.knee:.0f} % load, as load^"
+                f"{interaction.exponent:.1f}" if interaction.knee >= 0.05 else
+                f"as load^{interaction.exponent:.1f}")
+        return {"channel-interaction": {
+                    "term": f"a power limit: one load gain for every patch, "
+                            f"{100 * interaction.amount:.1f} % of the light lost at full load, "
+                            f"{knee} (load: the channels' outputs weighted by their shares of "
+                            "the white)",
+                    "fitted_on": f"the {sweeps} sweep points and {whites} white references "
+                                 "together"},
+                "tone-curve-shape": {
+                    "term": "power laws of the undimmed outputs: the bend is the power limit's",
+                    "fitted_on": f"the {sweeps} sweep points with the load gain divided out"},
+                }.get(effect, {"term": "not in this model", "fitted_on": "—"})
+    return {"tone-curve-shape": {
+                "term": "the grey ramp's tone curves (the seed authors' linearisation: each "
+                        "grey solved for its channels through the full-drive primaries, joined "
+                        "by straight lines)",
+                "fitted_on": f"the {greys} grey levels, black and white"},
+            "channel-interaction": {
+                "term": ("each channel's own sweep against its grey-ramp curve, applied as a "
+                         "colour leaves the grey axis" if chosen == "grey-ramp+sweeps" else
+                         "along the grey axis only, inside the grey ramp's tone curves"),
+                "fitted_on": f"the {greys} grey levels and the {sweeps} sweep points"},
+            }.get(effect, {"term": "not in this model", "fitted_on": "—"})
 
 
 def load_relative_noise(context: DiagnosisContext) -> np.ndarray:
