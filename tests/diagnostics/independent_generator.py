@@ -437,3 +437,123 @@ def generate_session(effects: dict | None = None, seed: int = 0,
     return GeneratedSession(session=session, effects=hidden, noise=a, true_XYZ=XYZ,
                             effect_free_XYZ=effect_free_XYZ, display=display,
                             effect_free_display=effect_free, plan=plan_name)
+
+
+# -- a follow-up on the same display ---------------------------------------------------------------
+# Appended after the forms: nothing above draws from these streams, so no earlier session changes.
+
+FOLLOW_UP_STREAM = 0xF0110
+"""Tag of a follow-up's noise stream: ``[session seed, FOLLOW_UP_STREAM, follow-up seed]``."""
+
+
+def patch_seconds(display: _Display, rgb) -> np.ndarray:
+    """The generator's clock for DAC triplets ``rgb`` (N, 3): 4 s a patch, up to 40 s more for
+    dark ones (a longer integration), as :func:`generate_session` times the plan's rows."""
+    rgb = np.atleast_2d(np.asarray(rgb, dtype=float))
+    clean_Y = display.light(rgb)[:, 1]
+    return 4.0 + 40.0 * np.exp(-np.maximum(clean_Y, 0) / (0.01 * display.white_Y))
+
+
+def _session_seed(generated: GeneratedSession) -> int:
+    metadata = generated.session.metadata
+    if "generator_seed" in metadata:
+        return int(metadata["generator_seed"])
+    import re
+
+    match = re.match(r"independent generator, seed (-?\d+)", generated.session.source)
+    if match is None:
+        raise ValueError(f"not a session of this generator: {generated.session.source!r}")
+    return int(match.group(1))
+
+
+def _noise_floor(generated: GeneratedSession) -> float:
+    """The session's noise floor (drawn by :func:`generate_session`, not kept): its stream is
+    replayed, and the replay must reproduce the session's measurements bit for bit."""
+    metadata = generated.session.metadata
+    if "noise_floor" in metadata:
+        return float(metadata["noise_floor"])
+    seed = _session_seed(generated)
+    session, XYZ = generated.session, generated.true_XYZ
+    n = len(session)
+    for drawn in (True, False):  # the noise drawn from the stream (noise=None) or given
+        rng = np.random.default_rng([seed, 90411])
+        display = _Display(rng)
+        for effect, (form, _) in generated.effects.items():
+            _hide(display, effect, form, rng)
+        a = float(rng.uniform(0.0005, 0.005)) if drawn else float(generated.noise)
+        if a != generated.noise:
+            continue
+        gain = a * rng.standard_t(6, n) / np.sqrt(6 / 4)
+        per_coordinate = 0.3 * a * rng.standard_normal((n, 3))
+        floor = rng.uniform(2e-5, 1e-4) * display.white_Y
+        shot = 0.1 * a * np.sqrt(np.abs(XYZ) * display.white_Y) * rng.standard_normal((n, 3))
+        measured = (XYZ * (1 + gain[:, None] + per_coordinate) + shot
+                    + floor * rng.standard_normal((n, 3)))
+        if np.array_equal(measured, session.XYZ):
+            return float(floor)
+    raise ValueError(f"cannot replay the noise of {session.source!r}")
+
+
+def measure_follow_up(generated: GeneratedSession, patches, seed: int = 0) -> GeneratedSession:
+    """Measure ``patches`` (:class:`~workbench.measurement.plans.Patch`, full field) on the same
+    display after the session: the session's rows, then the new ones.
+
+    The clock goes on from the session's last row at the generator's own time per patch
+    (:func:`patch_seconds`); a drift goes on in time (its form is a function of the time
+    since the session began). The noise model is the session's (the same gain noise ``a``
+    and floor) on a fresh stream, seeded ``[session seed, FOLLOW_UP_STREAM, seed]``. The
+    kinds are the patches' own. The result's truth (``true_XYZ``, ``effect_free_XYZ``)
+    covers every row and its :meth:`~GeneratedSession.reference_XYZ` reads the last two
+    whites of the combined session; ``session.metadata["follow_ups"]`` lists each follow-up
+    (rows, seconds, seed). A follow-up of a follow-up continues the same way.
+    """
+    patches = list(patches)
+    if any(p.window < 1.0 or any(p.surround) for p in patches):
+        raise ValueError("the independent generator shows full-field patches only")
+    session, display = generated.session, generated.display
+    session_seed = _session_seed(generated)
+    floor = _noise_floor(generated)
+    a = float(generated.noise)
+    rgb = np.array([p.rgb for p in patches], dtype=float).reshape(-1, 3)
+    kinds = np.array([p.kind for p in patches], dtype=object)
+    start = float(np.max(session.t_s))
+    durations = patch_seconds(display, rgb) if len(rgb) else np.zeros(0)
+    t = start + np.cumsum(durations)
+    XYZ = display.XYZ(rgb, t)
+    effect_free_XYZ = generated.effect_free_display.XYZ(rgb, t)
+    rng = np.random.default_rng([session_seed, FOLLOW_UP_STREAM, int(seed)])
+    n = len(rgb)
+    gain = a * rng.standard_t(6, n) / np.sqrt(6 / 4)
+    per_coordinate = 0.3 * a * rng.standard_normal((n, 3))
+    shot = 0.1 * a * np.sqrt(np.abs(XYZ) * display.white_Y) * rng.standard_normal((n, 3))
+    measured = (XYZ * (1 + gain[:, None] + per_coordinate) + shot
+                + floor * rng.standard_normal((n, 3)))
+    window = surround = None
+    if session.window is not None or session.surround is not None:
+        window = np.concatenate([session.window_or_full, np.ones(n)])
+        surround = np.vstack([session.surround_or_black, np.zeros((n, 3))])
+    follow_ups = list(session.metadata.get("follow_ups", ())) + [
+        {"rows": n, "seconds": float(durations.sum()), "seed": int(seed), "start_s": start}]
+    combined = Session(
+        kind=np.concatenate([np.asarray(session.kind, dtype=object), kinds]),
+        rgb=np.vstack([session.rgb, rgb]), XYZ=np.vstack([session.XYZ, measured]),
+        t_s=np.concatenate([session.t_s, t]),
+        source=f"{session.source} + follow-up of {n} patches (seed {seed})",
+        metadata={**session.metadata, "generator_seed": session_seed, "noise_floor": floor,
+                  "follow_ups": follow_ups},
+        window=window, surround=surround)
+    return GeneratedSession(
+        session=combined, effects=generated.effects, noise=generated.noise,
+        true_XYZ=np.vstack([generated.true_XYZ, XYZ]),
+        effect_free_XYZ=np.vstack([generated.effect_free_XYZ, effect_free_XYZ]),
+        display=display, effect_free_display=generated.effect_free_display, plan=generated.plan)
+
+
+def _measure_more(self: GeneratedSession, patches, seed: int = 0) -> GeneratedSession:
+    """``measure_follow_up(self, patches, seed)``: ``patches`` measured on the same display after
+    the session (see :func:`measure_follow_up`)."""
+    return measure_follow_up(self, patches, seed)
+
+
+GeneratedSession.measure_more = _measure_more
+__all__ += ["FOLLOW_UP_STREAM", "measure_follow_up", "patch_seconds"]
