@@ -88,6 +88,7 @@ class PeerOutcome:
     authors_dE00: float | None  # None: not applicable
     authors_unavailable: str = ""
     model: str = ""
+    consequences: tuple = ()  # (effect, its cause) for findings reported as another's consequence
     validation_ours_dE00: float | None = None
     seconds: float = 0.0
     error: str = ""  # the diagnosis failed: why (the session counts in no rate)
@@ -106,7 +107,10 @@ class PeerOutcome:
 
     @property
     def false_named(self) -> set:
-        return self.named - set(self.effects)
+        """Named effects not injected, less those reported as an injected cause's consequence
+        (a power limit's bend on the sweeps, said to be its consequence, names no false cause)."""
+        explained = {effect for effect, cause in self.consequences if cause in self.effects}
+        return self.named - set(self.effects) - explained
 
     @property
     def worse_than_authors(self) -> bool | None:
@@ -151,6 +155,8 @@ def _session_outcome(plan: str, scenario: str, effects: dict, seed: int,
         plan=plan, scenario=scenario, seed=seed, effects=dict(effects),
         magnitudes={e: (m if np.ndim(m) == 0 else None) for e, (_, m) in generated.effects.items()},
         noise=generated.noise, findings=tuple(f.effect for f in diagnosis.findings),
+        consequences=tuple((f.effect, f.details["consequence_of"]) for f in diagnosis.findings
+                           if f.details.get("consequence_of")),
         ours_dE00=score(diagnosis.extended), baseline_dE00=score(diagnosis.baseline),
         authors_dE00=authors, authors_unavailable=unavailable,
         model=str(getattr(choice, "chosen", "") or ""),

@@ -23,6 +23,7 @@ from workbench.diagnostics.extension import interaction_shape
 from workbench.diagnostics.follow_up import (
     BUDGET_SHARE,
     DARK_FRACTION,
+    GREY_DARK_FRACTION,
     NOTHING_UNIDENTIFIED,
     propose_follow_up,
 )
@@ -86,13 +87,17 @@ def test_a_hidden_interaction_gets_greys_and_mixtures_within_a_quarter_of_the_se
     counts = plan.counts()
     assert set(counts) == {"white", "grey", "mixture"}  # never validation: held-out colours stay unseen
     greys = [p.rgb[0] for p in plan.patches if p.kind == "grey"]
-    assert len(greys) >= 5 and all(g in GREY_LEVELS and g / 255 > 0.1 for g in greys)
+    # the whole ramp, dark greys too: the grey-ramp models take their tone curves from it
+    assert all(g in GREY_LEVELS for g in greys) and sum(g / 255 > 0.1 for g in greys) >= 5
+    assert min(greys) < 64
     mixtures = [p.rgb for p in plan.patches if p.kind == "mixture"]
     assert len(mixtures) >= 10 and any(min(m) == 0 for m in mixtures) and any(min(m) > 0 for m in mixtures)
     assert plan.patches[0].kind == plan.patches[-1].kind == "white"
-    # bright patches only: each grey and mixture at least DARK_FRACTION of white as the model predicts
-    rgb = np.array([p.rgb for p in plan.patches if p.kind != "white"], dtype=float)
-    assert np.all(diagnosis.extended.forward(rgb)[:, 1] / diagnosis.white[1] >= DARK_FRACTION)
+    # bright patches only: each mixture at least DARK_FRACTION of white as the model predicts, each
+    # grey at least GREY_DARK_FRACTION (the grey ramp must reach into the dark end)
+    for kind, floor in (("mixture", DARK_FRACTION), ("grey", GREY_DARK_FRACTION)):
+        rgb = np.array([p.rgb for p in plan.patches if p.kind == kind], dtype=float)
+        assert np.all(diagnosis.extended.forward(rgb)[:, 1] / diagnosis.white[1] >= floor)
     assert follow_up.serves == ("channel-interaction",)
     assert follow_up.share <= BUDGET_SHARE and follow_up.within_budget
     assert "session's own time per patch" in follow_up.timing  # the session has times

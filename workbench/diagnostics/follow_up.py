@@ -37,9 +37,10 @@ would identify what it could not, as the evidence asks:
   follow-up needed").
 
 Bright patches first: a CS-2000 takes 1–2 s on a bright patch and minutes
-near black, so proposed greys and mixtures darker than :data:`DARK_FRACTION`
-of white (as the diagnosis's own model predicts them) are left out, unless
-they are the only way to reach the counts that identify the effect.
+near black, so proposed mixtures darker than :data:`DARK_FRACTION` of white
+and greys darker than :data:`GREY_DARK_FRACTION` (as the diagnosis's own
+model predicts them) are left out, unless they are the only way to reach the
+counts that identify the effect.
 
 Instrument time is estimated from the session's own time per patch against
 luminance where the session has times (``t_s``), with the runner's
@@ -76,6 +77,7 @@ from workbench.measurement.plans import (
 from workbench.measurement.runner import format_duration
 
 __all__ = ["FollowUp", "FollowUpReason", "propose_follow_up", "BUDGET_SHARE", "DARK_FRACTION",
+           "GREY_DARK_FRACTION",
            "IDENTIFYING_GREYS", "IDENTIFYING_MIXTURES", "FEW_REFERENCES", "DENSE_REFERENCE_INTERVAL",
            "MAX_PATCH_S", "NOTHING_UNIDENTIFIED"]
 
@@ -83,7 +85,15 @@ BUDGET_SHARE = 0.25
 """The follow-up aims at no more than this share of the session's own instrument time."""
 
 DARK_FRACTION = 0.05
-"""Proposed greys and mixtures predicted darker than this share of white's luminance are left out."""
+"""Proposed mixtures predicted darker than this share of white's luminance are left out."""
+
+GREY_DARK_FRACTION = 0.003
+"""Proposed greys darker than this share of white are left out. Lower than for mixtures: the
+grey ramp is the tone curve of every candidate model built on it (the seed authors' method
+among them), and a ramp that starts at DAC 80 leaves the dark third of every colour to a
+straight line from black (independent generator, drive crosstalk on the paper plan: median
+held-out gain after the follow-up 8 % with greys from 5 % of white, 54 % from 0.3 %, at 13 %
+of the session's instrument time)."""
 
 IDENTIFYING_GREYS = 5
 """Greys above 10 % drive an interaction's shape is fitted on (as
@@ -379,15 +389,16 @@ def _with_whites(patches: list, interval: int) -> list:
     return out
 
 
-def _bright_enough(diagnosis, candidates: list, needed: int) -> tuple[list, list, bool]:
-    """(kept, dropped dark, dark kept?): candidates at or above DARK_FRACTION, brightest first;
-    where fewer than ``needed`` are, the brightest dark ones are kept to reach it."""
+def _bright_enough(diagnosis, candidates: list, needed: int, floor: float = DARK_FRACTION
+                   ) -> tuple[list, list, bool]:
+    """(kept, dropped dark, dark kept?): candidates at or above ``floor`` of white, brightest
+    first; where fewer than ``needed`` are, the brightest dark ones are kept to reach it."""
     if not candidates:
         return [], [], False
     relative = _relative_luminance(diagnosis, candidates)
     order = np.argsort(-relative, kind="stable")
-    bright = [candidates[i] for i in order if relative[i] >= DARK_FRACTION]
-    dark = [candidates[i] for i in order if relative[i] < DARK_FRACTION]
+    bright = [candidates[i] for i in order if relative[i] >= floor]
+    dark = [candidates[i] for i in order if relative[i] < floor]
     short = max(0, needed - len(bright))
     return bright + dark[:short], dark[short:], short > 0
 
@@ -459,7 +470,8 @@ def propose_follow_up(diagnosis) -> FollowUp:
             if n_bright_greys < IDENTIFYING_GREYS:
                 candidates = [Patch("grey", (v, v, v)) for v in GREY_LEVELS if (v, v, v) not in present]
                 greys, dropped, dark_kept = _bright_enough(diagnosis, candidates,
-                                                           IDENTIFYING_GREYS - n_bright_greys)
+                                                           IDENTIFYING_GREYS - n_bright_greys,
+                                                           GREY_DARK_FRACTION)
                 greys.sort(key=lambda p: p.rgb[0])
 
                 def grey_why(kept, dropped=dropped, dark_kept=dark_kept, common=common,
@@ -469,7 +481,7 @@ def propose_follow_up(diagnosis) -> FollowUp:
                            f"along the grey axis (the diagnosis needs {IDENTIFYING_GREYS} greys above "
                            f"10 % drive; the session has {n_bright_greys})")
                     if dropped:
-                        why += (f"; {len(dropped)} darker than {100 * DARK_FRACTION:.0f} % of white left "
+                        why += (f"; {len(dropped)} darker than {100 * GREY_DARK_FRACTION:.1f} % of white left "
                                 f"out (DAC {_levels(dropped)}: slow on a CS-2000, and the channels barely "
                                 "interact there)")
                     if len(left_out) > len(dropped):
