@@ -95,3 +95,65 @@ def test_an_unexplained_residual_says_how_big_and_what_to_measure():
     assert "greys" in unexplained["evidence"] or "mixtures" in unexplained["evidence"]
     assert diagnosis.findings[-1].effect == "unexplained-residual"
     assert np.isclose(unexplained["statistic"], diagnosis.extended_score.mean_dE00)
+
+
+@pytest.fixture(scope="module")
+def knee_csv(tmp_path_factory):
+    """A power limit past a knee: channel-interaction is the cause, tone-curve-shape its consequence,
+    and the power-limit model is exported."""
+    from tests.diagnostics.independent_generator import generate_session
+
+    session = generate_session({"channel-interaction": "knee"}, seed=101, plan="paper").session
+    return write_session_csv(session, tmp_path_factory.mktemp("knee") / "knee.csv")
+
+
+@pytest.fixture(scope="module")
+def knee_document(knee_csv):
+    return json.loads(_run("diagnose", str(knee_csv), "--json").stdout)
+
+
+def test_terminal_shows_a_consequence_under_its_cause_and_the_exported_model(knee_csv, knee_document):
+    text = _run("diagnose", str(knee_csv)).stdout
+    lines = text.splitlines()
+    cause = next(i for i, line in enumerate(lines) if line.startswith("finding 1 channel-interaction ("))
+    consequence = next(i for i, line in enumerate(lines)
+                       if line.startswith("finding 2 tone-curve-shape — consequence of channel-interaction (z "))
+    assert cause < consequence
+    # the reason is said once, on its own line under the consequence, not again in its evidence
+    assert "a consequence of channel-interaction" not in lines[consequence]
+    assert lines[consequence + 1].startswith("          ← the bend that channel-interaction's power limit")
+    assert text.count("the bend that channel-interaction's power limit puts on the sweeps") == 1
+    choice = knee_document["model_choice"]
+    assert choice["chosen"] == "power-limit"
+    extended = next(i for i, line in enumerate(lines) if line.startswith("extended  "))
+    assert lines[extended + 1] == f"model     power-limit exported: {choice['reason']}"
+    scores = lines[extended + 2]
+    assert scores.startswith("          cross-validated mean ΔE00 on the fit rows: ")
+    for name, value in choice["cv_mean_dE00"].items():
+        assert f"{name} {value:.3f}" in scores
+    assert f"power-limit {choice['cv_mean_dE00']['power-limit']:.3f} (exported)" in scores
+
+
+def test_report_indents_the_consequence_and_tables_the_model_choice(tmp_path, knee_csv):
+    from workbench.diagnostics.report import write_report
+    from workbench.session import read_session_csv
+
+    diagnosis = diagnose(read_session_csv(knee_csv))
+    assert [f.effect for f in diagnosis.findings] == ["channel-interaction", "tone-curve-shape"]
+    text = write_report(diagnosis, tmp_path / "knee.html").read_text()
+    findings = text[text.index("<h2>Findings</h2>"):text.index("<h3>Checked")]
+    cause = findings.index("<li><b>channel-interaction</b>")
+    consequence = findings.index("<li class=consequence><b>tone-curve-shape</b> "
+                                 "<span class='tag'>consequence of channel-interaction</span>")
+    assert cause < consequence
+    assert "li.consequence{margin-left:2em" in text  # indented under its cause
+    assert findings.count("the bend that channel-interaction&#x27;s power limit") == 1
+    assert "; a consequence of channel-interaction," not in findings
+    choice = diagnosis.model_choice.to_json()
+    section = text[text.index("<h2>Exported model: power-limit</h2>"):text.index("<h2>Noise</h2>")]
+    for name, value in choice["cv_mean_dE00"].items():
+        marked = name == "power-limit"
+        row = (f"<tr{' class=chosen' if marked else ''}><td>{name}</td>")
+        assert row in section and f"<td class=num>{value:.3f}</td>" in section
+    assert section.count("✓ exported") == 1
+    assert section.index("✓ exported") > section.index("<tr class=chosen><td>power-limit</td>")

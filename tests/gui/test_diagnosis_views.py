@@ -72,3 +72,45 @@ def test_a_checked_effect_reads_as_its_test_and_its_evidence():
     assert name == "checked"
     assert text == ("temporal-drift: z -0.9 < 2.33 (family-wise 5 %), p 0.81 · statistic 0.0032 ± 0.0015"
                     " · not in the model — the whites vary by 0.3 % (form warm-up)")
+
+
+@pytest.fixture(scope="module")
+def knee_diagnosis():
+    """A power limit past a knee: tone-curve-shape is channel-interaction's consequence, and the
+    power-limit model is exported."""
+    from tests.diagnostics.independent_generator import generate_session
+    from workbench.diagnostics import diagnose
+
+    return diagnose(generate_session({"channel-interaction": "knee"}, seed=101, plan="paper").session)
+
+
+def test_a_consequence_card_names_its_cause_and_says_why_once(knee_diagnosis):
+    cause, consequence = views.finding_cards(knee_diagnosis)
+    assert (cause.effect, consequence.effect) == ("channel-interaction", "tone-curve-shape")
+    assert cause.consequence_of == "" and cause.consequences == ("tone-curve-shape",)
+    assert consequence.consequence_of == "channel-interaction"
+    assert consequence.consequence.startswith("the bend that channel-interaction's power limit")
+    assert "a consequence of" not in consequence.evidence and consequence.evidence.startswith("the green sweep")
+    assert "consequence_of" not in dict(consequence.fields)  # the card's tag says it
+    # each finding's cross-validation note points at the exported model instead of repeating its reason
+    reason = views.model_choice_reason(knee_diagnosis)
+    assert reason and all(reason not in text for card in (cause, consequence) for _, text in card.fields)
+    assert dict(cause.fields)["cross_validation"] == (
+        "in the model through the power-limit model (why: see the exported model above)")
+
+
+def test_the_model_choice_rows_mark_the_exported_model(knee_diagnosis):
+    rows = views.model_choice_rows(knee_diagnosis)
+    choice = knee_diagnosis.model_choice.to_json()
+    assert [r.candidate for r in rows] == list(choice["cv_mean_dE00"])
+    assert [r.candidate for r in rows if r.chosen] == ["power-limit"]
+    assert all(r.cv_mean_dE00 == pytest.approx(choice["cv_mean_dE00"][r.candidate]) and r.description
+               for r in rows)
+    assert dict(views.summary_lines(knee_diagnosis))["exported"].startswith("power-limit, the best of 3")
+    assert "model_choice" not in dict(views.detail_lines(knee_diagnosis))  # its own table, not a line
+
+
+def test_a_record_repeated_elsewhere_in_the_json_is_not_listed_twice_on_its_card():
+    record = {"effect": "unexplained-residual", "evidence": "a gap", "z": 3.0, "consequence_of": None}
+    card, = views.finding_cards(_Diagnosis({"findings": [record], "unexplained": dict(record)}))
+    assert not any(name.startswith("unexplained") for name, _ in card.fields)

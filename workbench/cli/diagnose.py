@@ -65,7 +65,25 @@ def _finding_line(i, finding) -> str:
     parts = [f"z {z:.1f}" if z is not None else "", f"impact {finding['impact_dE00']:.2f} ΔE00"
              if finding["impact_dE00"] is not None else ""]
     figures = ", ".join(p for p in parts if p)
-    return f"finding {i} {finding['effect']} ({figures}; score {finding['score']:.1f}): {finding['evidence']}"
+    cause = finding.get("consequence_of")
+    name = finding["effect"] + (f" — consequence of {cause}" if cause else "")
+    from workbench.diagnostics.report import split_consequence
+
+    evidence, why = split_consequence(finding)
+    line = f"finding {i} {name} ({figures}; score {finding['score']:.1f}): {evidence}"
+    return line + (f"\n          ← {why}" if why else "")
+
+
+def _model_lines(result) -> list[str]:
+    """Which model the profile exports and why, and every candidate's cross-validated error."""
+    choice = result.get("model_choice")
+    if not choice:
+        return []
+    scores = ", ".join(f"{name} {'—' if value is None else f'{value:.3f}'}"
+                       + (" (exported)" if name == choice["chosen"] else "")
+                       for name, value in choice["cv_mean_dE00"].items())
+    return [f"model     {choice['chosen']} exported: {choice['reason']}",
+            f"          cross-validated mean ΔE00 on the fit rows: {scores}"]
 
 
 def _print_text(diagnosis) -> None:
@@ -109,6 +127,8 @@ def _print_text(diagnosis) -> None:
         print(f"not material  {check['effect']} (z {check['z']:.1f}, impact "
               f"{check['impact_dE00']:.3f} ΔE00 below the floor): {check['evidence']}")
     print(f"extended  {ext['model']}: {figures(ext)}  [{ext['protocol']}]")
+    for line in _model_lines(result):
+        print(line)
     if attribution:
         print(f"refit     the extension's fitting with no term: ΔE00 mean "
               f"{attribution['no_terms_refit']['mean_dE00']:.2f} (what better use of the same rows "

@@ -1,8 +1,11 @@
 """A self-contained HTML report of a diagnosis (plots embedded as PNG data URIs).
 
-Sections: the verdict (baseline vs extended on held-out colours), the
-session's noise model, the findings with their statistic, standard error, z
-and impact, what was checked and not found, what could not be tested, sweep fits and residuals per channel, the additivity
+Sections: the verdict (baseline vs extended on held-out colours), the model
+the profile exports (each candidate's cross-validated ΔE00, the chosen one
+marked), the session's noise model, the findings with their statistic,
+standard error, z and impact (a consequence of another finding indented after
+its cause, tagged "consequence of …"), what was checked and not found, what
+could not be tested, sweep fits and residuals per channel, the additivity
 chart, chromaticity vs level, the white references vs time, and the CIEDE2000
 histograms before and after. Plots use matplotlib's Agg canvas directly (no
 GUI backend, no global state).
@@ -24,7 +27,7 @@ from workbench.diagnostics.evidence import channel_sweeps, xy_of
 from workbench.diagnostics.selection import Diagnosis
 from workbench.fileio import atomic_writer
 
-__all__ = ["render_report", "write_report"]
+__all__ = ["render_report", "write_report", "split_consequence"]
 
 _COLOURS = ("#c0392b", "#27ae60", "#2e6fd0")
 _NAMES = ("red", "green", "blue")
@@ -133,6 +136,38 @@ def _score_row(label: str, model: str, score) -> str:
             f"<td>{score.p95_dE00:.2f}</td><td>{score.max_dE00:.2f}</td></tr>")
 
 
+def split_consequence(finding: dict) -> tuple[str, str]:
+    """A finding's own evidence and, where it is another finding's consequence, why (else "").
+
+    ``finding`` is a finding of ``Diagnosis.to_json()``. The evidence of a consequence ends with
+    "; a consequence of CAUSE, WHY" (one sentence for the JSON); the terminal, this report and
+    the window show WHY apart, under the finding marked as CAUSE's consequence, so it is said once.
+    """
+    cause = finding.get("consequence_of")
+    evidence = str(finding.get("evidence", ""))
+    if not cause:
+        return evidence, ""
+    own, marker, why = evidence.partition(f"; a consequence of {cause}, ")
+    return (own, why) if marker else (evidence, "")
+
+
+def _model_choice_section(choice: dict | None) -> str:
+    """Which model the profile exports: each candidate's cross-validated ΔE00, the chosen one marked."""
+    if not choice:
+        return ""
+    descriptions = choice.get("candidates") or {}
+    rows = "".join(
+        f"<tr{' class=chosen' if name == choice['chosen'] else ''}><td>{html.escape(name)}</td>"
+        f"<td>{html.escape(descriptions.get(name, ''))}</td>"
+        f"<td class=num>{'—' if value is None else f'{value:.3f}'}</td>"
+        f"<td>{'✓ exported' if name == choice['chosen'] else ''}</td></tr>"
+        for name, value in choice["cv_mean_dE00"].items())
+    return (f"<h2>Exported model: {html.escape(choice['chosen'])}</h2>"
+            "<table><tr><th>candidate</th><th>what it is</th><th>cross-validated mean ΔE00 "
+            f"(fit rows)</th><th></th></tr>{rows}</table>"
+            f"<p>{html.escape(choice['reason'].rstrip('.'))}.</p>")
+
+
 def render_report(diagnosis: Diagnosis) -> str:
     """The report as one HTML string."""
     findings = diagnosis.findings
@@ -143,12 +178,18 @@ def render_report(diagnosis: Diagnosis) -> str:
                     f"{html.escape(terms[f.effect]['fitted_on'])}")
         return html.escape(f.cross_validation or "reported only: it names no model term")
 
-    items = "".join(
-        f"<li><b>{html.escape(f.effect)}</b> (statistic {f.statistic:.4g} ± "
-        f"{f.standard_error:.2g}, z {f.z:.1f} against {f.critical_z:.2f}, impact "
-        f"{f.impact_dE00:.2f} ΔE00; score {f.score:.1f}): {html.escape(f.evidence)}"
-        f"<br><small>{model_note(f)}</small></li>"
-        for f in findings) or "<li>None beyond noise: the paper's model is adequate.</li>"
+    def item(f) -> str:
+        cause = f.details.get("consequence_of")
+        evidence, why = split_consequence({"evidence": f.evidence, "consequence_of": cause})
+        tag = (f" <span class='tag'>consequence of {html.escape(cause)}</span>" if cause else "")
+        because = f"<br><span class='why'>← {html.escape(why)}</span>" if why else ""
+        return (f"<li{' class=consequence' if cause else ''}><b>{html.escape(f.effect)}</b>{tag} "
+                f"(statistic {f.statistic:.4g} ± {f.standard_error:.2g}, z {f.z:.1f} against "
+                f"{f.critical_z:.2f}, impact {f.impact_dE00:.2f} ΔE00; score {f.score:.1f}): "
+                f"{html.escape(evidence)}{because}<br><small>{model_note(f)}</small></li>")
+
+    items = "".join(item(f) for f in findings) or (
+        "<li>None beyond noise: the paper's model is adequate.</li>")
     not_found = "".join(
         f"<li>{html.escape(r.effect)} (statistic {r.statistic:.4g} ± {r.standard_error:.2g}, "
         f"z {r.z:.1f} against {r.critical_z:.2f}"
@@ -177,7 +218,11 @@ def render_report(diagnosis: Diagnosis) -> str:
 <title>Display diagnosis — {html.escape(Path(diagnosis.session.source).name)}</title>
 <style>body{{font-family:system-ui,sans-serif;max-width:1150px;margin:2em auto;color:#222}}
 table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:4px 10px;text-align:left}}
-img{{max-width:100%}}.gain{{font-size:1.3em}}</style></head><body>
+img{{max-width:100%}}.gain{{font-size:1.3em}}
+li{{margin-bottom:.5em}}li.consequence{{margin-left:2em;padding-left:.8em;border-left:3px solid #c9c2ad}}
+.tag{{font-size:.85em;background:#ece6d6;border-radius:3px;padding:0 .4em;white-space:nowrap}}
+.why{{color:#555;font-style:italic}}tr.chosen{{font-weight:bold;background:#eef4e8}}
+td.num{{text-align:right}}</style></head><body>
 <h1>Display diagnosis</h1>
 <p>Session <code>{html.escape(diagnosis.session.source)}</code>: {len(diagnosis.session)} measurements,
 {int(diagnosis.session.mask("validation").sum())} validation colours held out (protocol
@@ -186,6 +231,7 @@ img{{max-width:100%}}.gain{{font-size:1.3em}}</style></head><body>
 {_score_row("baseline", diagnosis.baseline.describe(), diagnosis.baseline_score)}
 {_score_row("extended", diagnosis.extended.describe(), diagnosis.extended_score)}</table>
 <p class="gain">{"" if gain is None else f"Mean ΔE00 reduced by <b>{gain:.0f} %</b> on held-out colours."}</p>
+{_model_choice_section(document.get("model_choice"))}
 <p>CIEDE2000 in CIELAB whose white is the measured display white.</p>
 <h2>Noise</h2><p>{html.escape(document["noise"]["summary"])}.</p>
 <p>A finding needs z above the family-wise critical value ({100 * significance["family_alpha"]:.0f} %

@@ -22,6 +22,7 @@ import colour
 import numpy as np
 
 from workbench.diagnostics.evidence import channel_sweeps, xy_of
+from workbench.diagnostics.report import split_consequence
 
 __all__ = [
     "CHANNEL_NAMES",
@@ -30,6 +31,7 @@ __all__ = [
     "SweepView",
     "ValidationRow",
     "FindingCard",
+    "ModelChoiceRow",
     "XYZ_to_srgb8",
     "sweep_views",
     "additivity_view",
@@ -39,9 +41,13 @@ __all__ = [
     "validation_rows",
     "histogram_view",
     "finding_cards",
+    "split_consequence",
+    "model_choice_rows",
+    "model_choice_reason",
     "summary_lines",
     "detail_lines",
     "VERDICT_KEYS",
+    "SHOWN_APART",
     "FINDING_PLOTS",
 ]
 
@@ -255,13 +261,21 @@ FINDING_PLOTS = {
 
 @dataclass(frozen=True)
 class FindingCard:
-    """A finding as a card: its effect, its evidence, every other field as (name, text), and a plot."""
+    """A finding as a card: its effect, its evidence, every other field as (name, text), and a plot.
+
+    A finding another finding explains has ``consequence_of`` (the cause's effect) and
+    ``consequence`` (why, split off the evidence so that it is said once); its cause's card
+    lists it in ``consequences``.
+    """
 
     effect: str
     evidence: str
     fields: tuple = ()
     plot: PlotView | None = None
     extra: dict = field(default_factory=dict)
+    consequence_of: str = ""
+    consequence: str = ""
+    consequences: tuple = ()
 
 
 def _text(value) -> str:
@@ -318,25 +332,76 @@ def evidence_headline(record: dict) -> str:
     return " · ".join(parts)
 
 
+def _without_reason(note: str, reason: str) -> str:
+    """``note`` with the model choice's ``reason`` at its end said once, in the exported model's table."""
+    if not reason or not note.endswith(reason) or note == reason:
+        return note
+    return note[: -len(reason)].rstrip(" :;,") + " (why: see the exported model above)"
+
+
 def finding_cards(diagnosis) -> tuple:
-    """One card per finding in ``diagnosis.to_json()["findings"]``, with every field it has."""
+    """One card per finding in ``diagnosis.to_json()["findings"]``, with every field it has.
+
+    A ``cross_validation`` note that ends with the model choice's reason says it once, where the
+    exported model is shown (the note of every finding the chosen model answers repeats it).
+    """
     document = diagnosis.to_json()
+    reason = str((document.get("model_choice") or {}).get("reason") or "")
     cards = []
     for finding in document.get("findings", []):
         effect = str(finding.get("effect", "?"))
         fields = [("test", evidence_headline(finding))]
-        fields += [(k, _text(v)) for k, v in finding.items()
-                   if k not in ("effect", "evidence", *HEADLINE_KEYS) and v not in (None, "")]
+        fields += [(k, _without_reason(_text(v), reason) if k == "cross_validation" else _text(v))
+                   for k, v in finding.items()
+                   if k not in ("effect", "evidence", "consequence_of", *HEADLINE_KEYS)
+                   and v not in (None, "")]
         for where, entry in _entries_naming({k: v for k, v in document.items() if k != "findings"}, effect, ""):
-            fields += [(f"{where}: {k}", _text(v)) for k, v in entry.items() if k != "effect"]
+            if entry == finding:  # the same record again (``unexplained``): its fields are on the card
+                continue
+            fields += [(f"{where}: {k}", _text(v)) for k, v in entry.items()
+                       if k != "effect" and v not in (None, "")]
         plot = FINDING_PLOTS.get(effect)
-        cards.append(FindingCard(effect, str(finding.get("evidence", "")), tuple(fields),
-                                 None if plot is None else plot(diagnosis, finding)))
+        evidence, why = split_consequence(finding)
+        consequences = tuple(str(f.get("effect")) for f in document.get("findings", [])
+                             if f.get("consequence_of") == effect)
+        cards.append(FindingCard(effect, evidence, tuple(fields),
+                                 None if plot is None else plot(diagnosis, finding),
+                                 consequence_of=str(finding.get("consequence_of") or ""),
+                                 consequence=why, consequences=consequences))
     return tuple(cards)
+
+
+@dataclass(frozen=True)
+class ModelChoiceRow:
+    """A candidate model: its id, what it is, its cross-validated mean ΔE00 on the fit rows
+    (None: not scored), and whether the profile exports it."""
+
+    candidate: str
+    description: str
+    cv_mean_dE00: float | None
+    chosen: bool
+
+
+def model_choice_rows(diagnosis) -> tuple:
+    """The candidates ``model_choice`` scored, in its order; empty where the diagnosis has no choice."""
+    choice = diagnosis.to_json().get("model_choice") or {}
+    descriptions = choice.get("candidates") or {}
+    return tuple(ModelChoiceRow(str(name), str(descriptions.get(name, "")),
+                                None if value is None else float(value), name == choice.get("chosen"))
+                 for name, value in (choice.get("cv_mean_dE00") or {}).items())
+
+
+def model_choice_reason(diagnosis) -> str:
+    """Why the exported model was chosen ("" without a choice)."""
+    choice = diagnosis.to_json().get("model_choice") or {}
+    return str(choice.get("reason") or "")
 
 
 VERDICT_KEYS = ("session", "baseline", "extended", "gain")
 """Top-level entries of ``to_json()`` that make the one-glance verdict; the others are details."""
+
+SHOWN_APART = ("model_choice",)
+"""Top-level entries of ``to_json()`` the page shows in a table of their own, not as detail lines."""
 
 
 def _scores(block: dict) -> str:
@@ -347,7 +412,7 @@ def _scores(block: dict) -> str:
 
 
 def summary_lines(diagnosis) -> tuple:
-    """The verdict (session, baseline, extended, gain) as ``(name, text)`` lines."""
+    """The verdict (session, baseline, extended, gain, the exported model) as ``(name, text)`` lines."""
     document = diagnosis.to_json()
     session = document.get("session", {})
     gain = (document.get("gain") or {}).get("mean_dE00_reduction_pct")
@@ -357,6 +422,10 @@ def summary_lines(diagnosis) -> tuple:
              ("extended", _scores(document.get("extended") or {}))]
     if gain is not None:
         lines.append(("gain", f"mean ΔE00 reduced by {gain:.0f} % on held-out colours"))
+    choice = document.get("model_choice") or {}
+    if choice.get("chosen"):
+        lines.append(("exported", f"{choice['chosen']}, the best of {len(choice.get('cv_mean_dE00') or {})} "
+                                  "candidates cross-validated on the fit rows"))
     return tuple(lines)
 
 
@@ -374,11 +443,11 @@ def _record_line(record: dict) -> str:
 
 
 def detail_lines(diagnosis) -> tuple:
-    """Every other top-level entry of ``to_json()`` (findings aside) as ``(name, text)``; a list of
-    records gives one line per record."""
+    """Every other top-level entry of ``to_json()`` (findings and :data:`SHOWN_APART` aside) as
+    ``(name, text)``; a list of records gives one line per record."""
     lines = []
     for key, value in diagnosis.to_json().items():
-        if key in VERDICT_KEYS or key == "findings" or value is None:
+        if key in VERDICT_KEYS or key in SHOWN_APART or key == "findings" or value is None:
             continue
         if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
             lines += [(key, _record_line(v)) for v in value]

@@ -2,10 +2,14 @@
 
 Shows whatever :func:`workbench.diagnostics.diagnose` returned (through
 :mod:`workbench.gui.diagnosis_views`): the verdict (every top-level entry of
-``to_json()``), the findings as cards with their evidence and a plot each,
-per-channel sweep fits with residuals (baseline vs extended), additivity,
-chromaticity vs drive, the white references over time, the validation table
-and the ΔE00 histograms. "Open report" writes the HTML report and opens it.
+``to_json()``), the model the profile exports (a table of the candidates'
+cross-validated ΔE00, the chosen one marked, and why), the findings as cards
+with their evidence and a plot each (a consequence of another finding
+indented under its cause, tagged "consequence of …"), per-channel sweep fits
+with residuals (baseline vs extended), additivity, chromaticity vs drive, the
+white references over time, the validation table and the ΔE00 histograms.
+"Open report" writes the HTML report and opens it. Every text wraps; the page
+fits a 1366 × 768 screen.
 
 Where the diagnosis leaves something a measurement would identify, the card
 of that finding carries "Measure the N patches that identify this — about M
@@ -34,6 +38,9 @@ from workbench.gui.widgets.validation_table import ValidationHistogram, Validati
 __all__ = ["DiagnosePage"]
 
 _LOG = logging.getLogger(__name__)
+
+_BOTTOM_PLOT_MIN_WIDTH = 160
+"""Pixels: the least width of each plot in the row below the sweeps (the page fits 1366 × 768)."""
 
 
 class DiagnosePage(QWidget):
@@ -67,6 +74,10 @@ class DiagnosePage(QWidget):
         self._staged = None
         self.cards = FindingCards()
         self.fits = FitPlots()
+        # Four plots share the row below the sweeps where the session has greys: at their default
+        # minimum width the page was wider than a 1366-pixel screen and clipped the right column.
+        for plot in (self.fits.additivity, self.fits.greys, self.fits.chromaticity, self.fits.whites):
+            plot.setMinimumWidth(_BOTTOM_PLOT_MIN_WIDTH)
         self.table = ValidationTable()
         self.histogram = ValidationHistogram()
 
