@@ -194,6 +194,11 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         reason = (f"the {current} predicts unseen fit rows as well as any candidate allows "
                   f"(cross-validated mean ΔE00: {listed}" + (f"; {'; '.join(notes)}" if notes
                                                              else "") + ")")
+    elif scores[chosen] > scores.get(current, float("inf")):
+        reason = (f"{chosen}, the model of the identified cause, predicts unseen fit rows no "
+                  f"worse beyond noise than the {current} ({scores[chosen]:.3f} against "
+                  f"{scores[current]:.3f} cross-validated mean ΔE00, within noise; "
+                  f"{'; '.join(notes)})")
     else:
         reason = (f"{chosen} predicts unseen fit rows better than the {current} "
                   f"({scores[chosen]:.3f} against {scores[current]:.3f} cross-validated mean "
