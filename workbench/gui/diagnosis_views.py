@@ -115,6 +115,20 @@ def sweep_views(diagnosis) -> tuple:
     return views
 
 
+def _model_sweep(model, channel: int, drive) -> np.ndarray:
+    """A model's single-channel sweep, black subtracted, relative to its own full drive.
+
+    Through the whole model, not the tone curve alone: a power limit dims a sweep by its own
+    load, and the sweep-corrected grey ramp applies each channel's ratio on its own axis.
+    """
+    drive = np.asarray(drive, dtype=float)
+    rgb = np.zeros((drive.size + 1, 3))
+    rgb[:-1, channel] = 255.0 * np.clip(drive, 0.0, 1.0)
+    rgb[-1, channel] = 255.0
+    Y = model.forward(rgb)[:, 1] - model.black_XYZ[1]
+    return Y[:-1] / Y[-1]
+
+
 def _sweep_views(diagnosis) -> tuple:
     raw_sweeps = channel_sweeps(diagnosis.context.raw, np.zeros(3))
     extended = diagnosis.extended
@@ -127,11 +141,15 @@ def _sweep_views(diagnosis) -> tuple:
         residuals = [Series("baseline", raw.drive * 255, 100 * (raw.output - raw.drive ** gamma), 3)]
         if hasattr(extended, "tone"):
             curve = extended.tone[c]
+            interaction = getattr(extended, "interaction", None)
+            bends = interaction is not None and (interaction.load_weights is not None
+                                                 or interaction.axis_ratio is not None)
             fit += [Series("black subtracted" + (", drift corrected" if diagnosis.context.drift_found else ""),
                            sweep.drive * 255, sweep.output, c),
-                    Series(f"extended ({curve.form})", _GRID * 255, curve.forward(_GRID), c, points=False)]
+                    Series(f"extended ({curve.form}" + (" × its interaction)" if bends else ")"),
+                           _GRID * 255, _model_sweep(extended, c, _GRID), c, points=False)]
             residuals.append(Series("extended", sweep.drive * 255,
-                                    100 * (sweep.output - curve.forward(sweep.drive)), c))
+                                    100 * (sweep.output - _model_sweep(extended, c, sweep.drive)), c))
         name = CHANNEL_NAMES[c]
         views.append(SweepView(PlotView(f"{name} sweep", "DAC", "output / full drive", tuple(fit)),
                                PlotView(f"{name} residuals", "DAC", "residual, % of full drive", tuple(residuals))))
