@@ -151,7 +151,9 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     the paired per-row difference (:data:`NOISE_TESTED_CANDIDATES`): on a
     clean display the paper's model is the truth, and a flexible correction
     that interpolates the fit rows a little better than noise allows costs
-    held-out accuracy.
+    held-out accuracy. Where ``channel-interaction`` was found the display is
+    not additive, the correction answers it, and lowering the error is
+    enough.
     """
     def score(errors):
         return float("inf") if errors is None else group_mean(*errors)
@@ -171,7 +173,8 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                 drift=drift)
             scores[name] = score(errors)
             gain, standard_error = paired_gain(chosen_errors, errors)
-            needed = (CV_Z * standard_error if name in NOISE_TESTED_CANDIDATES else
+            noise_tested = name in NOISE_TESTED_CANDIDATES and "channel-interaction" not in found
+            needed = (CV_Z * standard_error if noise_tested else
                       -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES else 0.0)
             if gain > needed and np.isfinite(scores[name]):
                 notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
