@@ -71,3 +71,22 @@ def test_grey_ramp_and_power_limit_models_survive_the_profile(tmp_path):
         inside = diagnosis.extended.forward(rgb)
         np.testing.assert_allclose(model.forward(model.inverse(inside)), inside, rtol=2e-3,
                                    atol=2e-3 * inside[:, 1].max())
+
+
+@pytest.mark.parametrize("form, seed", [("knee", 30003), ("power-limit-quadratic", 30000)])
+def test_a_black_read_high_in_Y_alone_is_no_black_level(form, seed):
+    """One heavy-tailed black reading 2.5σ up in Y at xy (−0.09, 0.81), where no light is: the
+    black as a whole (X, Y, Z together) is within noise, and no black-offset is named."""
+    diagnosis = diagnose(generate_session({"channel-interaction": form}, seed=seed,
+                                          plan="authors-2024").session)
+    black = next(r for r in diagnosis.results if r.effect == "black-offset")
+    assert black.details["p_Y"] < 0.01 < black.details["p_XYZ"]
+    assert not black.found
+
+
+def test_a_real_black_level_is_still_named():
+    for form in ("bluish", "reddish"):
+        for seed in SEEDS:
+            diagnosis = diagnose(generate_session({"black-offset": form}, seed=seed,
+                                                  plan="authors-2024").session)
+            assert "black-offset" in {f.effect for f in diagnosis.findings}, (form, seed)

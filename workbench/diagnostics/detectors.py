@@ -388,14 +388,22 @@ def detect_black_offset(context: DiagnosisContext) -> DetectorResult:
     sd = float(noise.sd_Y(black_Y)) / np.sqrt(context.black_count)
     ratio = black_Y / white_Y
     z = black_Y / sd
-    p = t_sf(z, noise.dof)  # Student t: the noise is estimated
+    p_Y = t_sf(z, noise.dof)  # Student t: the noise is estimated
+    # light has all three tristimulus values: the black as a whole must stand out of the noise
+    # too (χ² on 3 dof), or a Y read high by one heavy-tailed reading, at a chromaticity no
+    # light has, is named a black level
+    covariance = _mean_covariance(noise, context.black, context.black_count)
+    chi2 = float(context.black @ np.linalg.solve(covariance, context.black))
+    p_XYZ = f_sf(chi2 / 3, 3, noise.dof if np.isfinite(noise.dof) else 10 ** 6)
+    p = max(p_Y, p_XYZ)
     xy = xy_of(context.black)
     evidence = (f"black measures {100 * ratio:.2f} % of white (Y {black_Y:.4g} ± {sd:.2g} of "
-                f"{white_Y:.4g}, {context.black_count} distinct black row(s)) at xy "
-                f"({xy[0]:.3f}, {xy[1]:.3f}); the baseline predicts no light at DAC 0 and lets "
-                "black leak into every primary")
+                f"{white_Y:.4g}, {context.black_count} distinct black row(s); X, Y, Z together "
+                f"χ² {chi2:.1f} on 3 dof) at xy ({xy[0]:.3f}, {xy[1]:.3f}); the baseline predicts "
+                "no light at DAC 0 and lets black leak into every primary")
     return _result("black-offset", ratio, sd / white_Y, p, evidence,
-                   {"black_XYZ": context.black.tolist(), "ratio": ratio}, z=z)
+                   {"black_XYZ": context.black.tolist(), "ratio": ratio, "chi2_XYZ": chi2,
+                    "p_Y": p_Y, "p_XYZ": p_XYZ}, z=z if p == p_Y else None)
 
 
 def _mean_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int) -> np.ndarray:
