@@ -30,7 +30,7 @@ def test_drive_crosstalk_with_white_additive_is_named_from_the_greys(plan):
         diagnosis = diagnose(generated.session)
         interaction = next(r for r in diagnosis.results if r.effect == "channel-interaction")
         assert interaction.found, (seed, interaction.evidence)
-        assert "greys at partial drive" in interaction.evidence
+        assert "greys above 20 % drive measure" in interaction.evidence
         assert diagnosis.findings[0].effect == "channel-interaction"
         # the exported model is no worse than the seed authors' method on hidden colours
         rgb = hidden_colours(300, seed)
