@@ -46,9 +46,10 @@ def build_window(simulate: bool = False, settings=None, *, lazy: bool = False):
 
 
 def run_gui(path: str | None = None, *, simulate: bool = False, screenshot_dir: str | None = None,
-            time_scale: float | None = None) -> int:
+            time_scale: float | None = None, size: tuple | None = None) -> int:
     """Show the window (opening ``path`` if given) until it is closed; or, with ``screenshot_dir``,
-    run a simulated calibration to the end, render every page to ``DIR/<page>.png`` and exit."""
+    run a simulated calibration to the end, render every page to ``DIR/<page>.png`` and exit.
+    ``size``: the window's (width, height) in pixels, where not its default."""
     app = application()
     if screenshot_dir is not None:
         import tempfile
@@ -59,12 +60,15 @@ def run_gui(path: str | None = None, *, simulate: bool = False, screenshot_dir: 
         # A fresh layout, and nothing added to the user's recent files.
         with tempfile.TemporaryDirectory(prefix="vr-workbench-screenshot-settings-") as settings_dir:
             window = build_window(True, WindowSettings(settings_dir))
-            written = save_screenshots(window, Path(screenshot_dir), path=path, time_scale=time_scale)
+            written = save_screenshots(window, Path(screenshot_dir), path=path, time_scale=time_scale,
+                                       size=size)
             for file in written:
                 print(f"wrote {file}")
             _dispose(app, window)
         return 0
     window = build_window(simulate, lazy=True)
+    if size is not None:
+        window.resize(*size)
     if time_scale is not None:
         window.pages["calibrate"].form.time_scale.setValue(time_scale)
     window.show()

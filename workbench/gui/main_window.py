@@ -37,7 +37,7 @@ from workbench.gui.settings import WindowSettings
 from workbench.gui.workers import CallWorker, describe_error
 from workbench.workspace import load_path, unfinished_journal
 
-__all__ = ["PAGES", "MainWindow", "UnavailablePage", "OPEN_FILTER", "SHORTCUTS"]
+__all__ = ["PAGES", "DEFAULT_SIZE", "MainWindow", "UnavailablePage", "OPEN_FILTER", "SHORTCUTS"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -50,6 +50,9 @@ PAGES = (
     ("export", "workbench.gui.pages.export", "ExportPage", "Export"),
 )
 """The flow, in order: (key, module, class, title)."""
+
+DEFAULT_SIZE = (1500, 950)
+"""The window's size, pixels, until the user's saved layout says otherwise (every page also fits 1366 × 768)."""
 
 OPEN_FILTER = ("Sessions and profiles (*.csv *.ti3 *.mat *.json);;Session CSV (*.csv);;Argyll (*.ti3);;"
                "Psychtoolbox (*.mat);;Profile (*.vrprofile.json *.json);;All files (*)")
@@ -175,7 +178,7 @@ class MainWindow(QMainWindow):
         workspace.subscribe("measurement-changed", lambda ws: self._update_status())
         self._update_title()
         self._update_status()
-        self.resize(1500, 950)
+        self.resize(*DEFAULT_SIZE)
         geometry, state = self.settings.layout()
         if geometry is not None:
             self.restoreGeometry(geometry)

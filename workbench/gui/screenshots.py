@@ -4,11 +4,14 @@ The calibration is the paper's plan on the simulated headset with two
 realistic effects (black offset, channel interaction), at a fast time scale,
 so that every plot has data and the diagnosis finds something. A page whose
 ``grab()`` would not show it faithfully (the 3D scene) renders itself with
-``save_screenshot(path)``.
+``save_screenshot(path)``. The window has its default size
+(:data:`~workbench.gui.main_window.DEFAULT_SIZE`) unless ``size`` says
+otherwise (``gui --screenshot DIR --size 1366x768``).
 """
 
 from __future__ import annotations
 
+import logging
 import tempfile
 import time
 from pathlib import Path
@@ -17,17 +20,19 @@ from PySide6.QtCore import QEventLoop, QTimer
 from PySide6.QtWidgets import QApplication
 
 from workbench.errors import WorkbenchError
-from workbench.gui.main_window import PAGES
+from workbench.gui.main_window import DEFAULT_SIZE, PAGES
 
 __all__ = ["SCREENSHOT_SIZE", "SCREENSHOT_EFFECTS", "run_simulated_calibration", "save_screenshots"]
 
-SCREENSHOT_SIZE = (1800, 1100)
-"""Window size of the screenshots, pixels."""
+SCREENSHOT_SIZE = DEFAULT_SIZE
+"""Window size of the screenshots, pixels: the window's default size."""
 
 SCREENSHOT_EFFECTS = {"black-offset": 0.004, "channel-interaction": 0.10}
 """Headset effects of the simulated calibration the screenshots show."""
 
 _TIMEOUT_S = 300.0
+
+_LOG = logging.getLogger(__name__)
 
 
 def _wait(predicate, timeout_s: float = _TIMEOUT_S, what: str = "") -> None:
@@ -65,11 +70,14 @@ def run_simulated_calibration(window, out_dir: Path, *, plan: str = "paper", tim
         raise WorkbenchError(f"the simulated calibration failed: {failed[0]}")
 
 
-def save_screenshots(window, directory: Path, *, path=None, time_scale: float | None = None) -> list:
-    """Calibrate (simulated), then write ``directory/<page>.png`` for every page; returns the files."""
+def save_screenshots(window, directory: Path, *, path=None, time_scale: float | None = None,
+                     size: tuple | None = None) -> list:
+    """Calibrate (simulated), then write ``directory/<page>.png`` for every page at ``size`` (width,
+    height; the window's default size by default); returns the files."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    window.resize(*SCREENSHOT_SIZE)
+    size = tuple(size or SCREENSHOT_SIZE)
+    window.resize(*size)
     window.show()
     QApplication.processEvents()
     with tempfile.TemporaryDirectory(prefix="vr-workbench-screenshots-") as out_dir:
@@ -88,6 +96,11 @@ def save_screenshots(window, directory: Path, *, path=None, time_scale: float | 
             page = window.pages[key]
             if callable(getattr(page, "finish_drawing", None)):
                 page.finish_drawing()
+            window.resize(*size)
+            QApplication.processEvents()
+            if (window.width(), window.height()) != size:
+                _LOG.warning("the %s page does not fit %d×%d: the window is %d×%d", key, *size,
+                             window.width(), window.height())
             if key == "export" and callable(getattr(page, "export", None)):
                 page.export()  # into the temporary session directory: the page shows what it wrote
                 bundles = []
