@@ -36,7 +36,7 @@ from workbench.measurement.plans import MEASUREMENT_PLANS, MeasurementPlan, meas
 from workbench.measurement.runner import JOURNAL_NAME, MeasurementRun
 from workbench.measurement.simulation import modelled_plan_duration_s, open_simulated_instrument
 
-__all__ = ["SIMULATED", "DISPLAY_KINDS", "CalibrationSetup", "PlanEstimate", "plan_estimate",
+__all__ = ["SIMULATED", "DISPLAY_KINDS", "PLAN_DESCRIPTIONS", "CalibrationSetup", "PlanEstimate", "plan_estimate",
            "cs2000_ports", "planned", "open_run", "check_tcp_display"]
 
 SIMULATED = "simulated"
@@ -48,6 +48,15 @@ DISPLAY_KINDS = {
     "tcp": "VR application (TCP patch protocol)",
 }
 """Patch display kind → how the form names it."""
+
+PLAN_DESCRIPTIONS = {
+    "paper": "as in the paper",
+    "paper+greys": "with greys and mixtures",
+    "apl": "windows on surrounds",
+    "paper+apl": "with the APL block",
+    "authors-2024": "the authors' own protocol with a grey ramp",
+}
+"""What a built-in plan is, in words (the Calibrate form's estimate says it; the plan list only names it)."""
 
 _INSTRUMENT_TIMEOUT_S = 10.0  # design §6: read timeout at least 10 s
 _DISPLAY_TIMEOUT_S = 10.0

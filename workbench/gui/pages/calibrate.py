@@ -59,6 +59,12 @@ __all__ = ["CalibratePage"]
 
 _LOG = logging.getLogger(__name__)
 
+_FORM_WIDTH = 440
+"""Pixels: the setup form's column where the window is wide enough (its lists show whole at 1366 × 768)."""
+
+_FORM_MIN_WIDTH = 300
+"""Pixels: the least width of the setup form's column (the form fits it without scrolling sideways)."""
+
 
 class CalibratePage(QWidget):
     """The guided calibration.
@@ -89,10 +95,13 @@ class CalibratePage(QWidget):
         self._active = False
 
         self.form = CalibrationForm()
-        form_scroll = QScrollArea()
+        # The form follows the column's width (it wraps and elides rather than widening): vertical
+        # scrolling only, as on a 1366 × 768 screen.
+        self.form_scroll = form_scroll = QScrollArea()
         form_scroll.setWidget(self.form)
         form_scroll.setWidgetResizable(True)
-        form_scroll.setMinimumWidth(380)
+        form_scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        form_scroll.setMinimumWidth(_FORM_MIN_WIDTH)
 
         self.start_button = QPushButton("Start")
         self.pause_button = QPushButton("Pause")
@@ -133,7 +142,9 @@ class CalibratePage(QWidget):
         splitter = QSplitter()
         splitter.addWidget(form_scroll)
         splitter.addWidget(right)
-        splitter.setSizes([400, 1000])
+        splitter.setSizes([_FORM_WIDTH, 1060])
+        splitter.setStretchFactor(0, 0)  # a narrower window narrows the plots, not the form
+        splitter.setStretchFactor(1, 1)
         layout = QHBoxLayout(self)
         layout.addWidget(splitter)
 

@@ -3,6 +3,13 @@
 It produces a :class:`~workbench.gui.calibration_setup.CalibrationSetup` and
 shows, before anything starts, the plan's patch count and its estimated
 instrument time.
+
+It fits a narrow column (the window at 1366 × 768): lists shrink to the
+column and elide what does not fit (the whole text in the tooltip and in the
+open list), the buttons beside a field sit on their own row under it, the
+estimate wraps, and only the chosen patch display's settings show (the screen
+and "Identify screens" for a full-screen window, the address and "Test
+connection" for a VR application); nothing needs horizontal scrolling.
 """
 
 from __future__ import annotations
@@ -11,7 +18,7 @@ import secrets
 import tempfile
 from pathlib import Path
 
-from PySide6.QtCore import Signal
+from PySide6.QtCore import QEvent, Qt, Signal
 from PySide6.QtGui import QGuiApplication
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -24,7 +31,12 @@ from PySide6.QtWidgets import (
     QLabel,
     QLineEdit,
     QPushButton,
+    QSizePolicy,
     QSpinBox,
+    QStyle,
+    QStyleOptionComboBox,
+    QStylePainter,
+    QToolButton,
     QVBoxLayout,
     QWidget,
 )
@@ -34,6 +46,7 @@ from workbench.errors import WorkbenchError
 from workbench.measurement.plans import MEASUREMENT_PLANS
 from workbench.gui.calibration_setup import (
     DISPLAY_KINDS,
+    PLAN_DESCRIPTIONS,
     SIMULATED,
     CalibrationSetup,
     cs2000_ports,
@@ -44,7 +57,73 @@ from workbench.gui.screen_overlay import identify_screens
 from workbench.gui.workers import CallWorker
 from workbench.measurement.runner import format_duration
 
-__all__ = ["CalibrationForm"]
+__all__ = ["CalibrationForm", "ElidingComboBox"]
+
+
+class ElidingComboBox(QComboBox):
+    """A list that shrinks to its column: the current text is elided ("…") where it does not fit,
+    the whole of it is the tooltip, and the open list is as wide as its longest entry."""
+
+    MIN_CHARACTERS = 12
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.setMinimumContentsLength(self.MIN_CHARACTERS)
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
+        self.model().rowsInserted.connect(self._fit_popup)
+        self.model().modelReset.connect(self._fit_popup)
+
+    def event(self, event):
+        if event.type() == QEvent.Type.ToolTip:
+            self.setToolTip(self.currentText())
+        return super().event(event)
+
+    def _fit_popup(self, *_) -> None:
+        view = self.view()
+        widest = max((self.fontMetrics().horizontalAdvance(self.itemText(i)) for i in range(self.count())), default=0)
+        view.setMinimumWidth(widest + 3 * self.style().pixelMetric(QStyle.PixelMetric.PM_ScrollBarExtent))
+
+    def text_fits(self) -> bool:
+        """Whether the current text shows whole (not elided)."""
+        return self.fontMetrics().horizontalAdvance(self.currentText()) <= self._text_rect().width()
+
+    def _text_rect(self):
+        option = QStyleOptionComboBox()
+        self.initStyleOption(option)
+        return self.style().subControlRect(QStyle.ComplexControl.CC_ComboBox, option,
+                                           QStyle.SubControl.SC_ComboBoxEditField, self)
+
+    def paintEvent(self, event):  # noqa: N802 - Qt's name
+        painter = QStylePainter(self)
+        option = QStyleOptionComboBox()
+        self.initStyleOption(option)
+        painter.drawComplexControl(QStyle.ComplexControl.CC_ComboBox, option)
+        width = self._text_rect().width() - 2
+        option.currentText = self.fontMetrics().elidedText(option.currentText, Qt.TextElideMode.ElideRight, width)
+        painter.drawControl(QStyle.ControlElement.CE_ComboBoxLabel, option)
+
+
+def _field_with_button(field: QWidget, button: QPushButton) -> QWidget:
+    """``field`` over ``button`` (the button on its own row, at its full width, left-aligned)."""
+    box = QWidget()
+    column = QVBoxLayout(box)
+    column.setContentsMargins(0, 0, 0, 0)
+    column.setSpacing(4)
+    column.addWidget(field)
+    row = QHBoxLayout()
+    row.addWidget(button)
+    row.addStretch(1)
+    column.addLayout(row)
+    return box
+
+
+def _form(group: QGroupBox) -> QFormLayout:
+    """A form whose fields take the column's width; a field too wide to sit beside its label goes below it."""
+    form = QFormLayout(group)
+    form.setFieldGrowthPolicy(QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+    form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)
+    return form
 
 
 class CalibrationForm(QWidget):
@@ -69,14 +148,11 @@ class CalibrationForm(QWidget):
     # -- groups -----------------------------------------------------------------------
     def _instrument_group(self) -> QGroupBox:
         group = QGroupBox("Instrument")
-        form = QFormLayout(group)
-        row = QHBoxLayout()
-        self.instrument = QComboBox()
+        form = _form(group)
+        self.instrument = ElidingComboBox()
         self.refresh_ports = QPushButton("Find CS-2000")
         self.refresh_ports.setToolTip("list the serial ports whose USB VID/PID is a CS-2000's (0x132B/0x2104)")
-        row.addWidget(self.instrument, 1)
-        row.addWidget(self.refresh_ports)
-        form.addRow("CS-2000", row)
+        form.addRow("CS-2000", _field_with_button(self.instrument, self.refresh_ports))
         self.effects: dict = {}
         effects = QWidget()
         grid = QFormLayout(effects)
@@ -106,13 +182,12 @@ class CalibrationForm(QWidget):
 
     def _display_group(self) -> QGroupBox:
         group = QGroupBox("Patch display")
-        form = QFormLayout(group)
-        self.display = QComboBox()
+        form = _form(group)
+        self.display = ElidingComboBox()
         for kind, name in DISPLAY_KINDS.items():
             self.display.addItem(name, kind)
         form.addRow("show patches on", self.display)
-        row = QHBoxLayout()
-        self.screen = QComboBox()
+        self.screen = ElidingComboBox()
         for i, screen in enumerate(QGuiApplication.screens()):
             geometry = screen.geometry()
             self.screen.addItem(f"{i}: {screen.name()} {geometry.width()}×{geometry.height()}", i)
@@ -120,37 +195,35 @@ class CalibrationForm(QWidget):
         self.identify = QPushButton("Identify screens")
         self.identify.setToolTip("show each screen's number on it for a few seconds")
         self.identify.clicked.connect(lambda: identify_screens(self))
-        row.addWidget(self.screen, 1)
-        row.addWidget(self.identify)
-        form.addRow("screen", row)
-        row = QHBoxLayout()
+        self._screen_row = _field_with_button(self.screen, self.identify)
+        form.addRow("screen", self._screen_row)
         self.tcp = QLineEdit("127.0.0.1:47800")
         self.test_tcp = QPushButton("Test connection")
+        self.test_tcp.setToolTip("say hello to the VR application's patch server at this address")
         self.test_tcp.clicked.connect(self.test_connection)
-        row.addWidget(self.tcp, 1)
-        row.addWidget(self.test_tcp)
-        form.addRow("patch server", row)
+        self._tcp_row = _field_with_button(self.tcp, self.test_tcp)
+        form.addRow("patch server", self._tcp_row)
         self.tcp_status = QLabel("")
         self.tcp_status.setWordWrap(True)
         form.addRow("", self.tcp_status)
+        self._display_form = form
         self.display.currentIndexChanged.connect(self._display_changed)
         return group
 
     def _plan_group(self) -> QGroupBox:
         group = QGroupBox("Plan and output")
-        form = QFormLayout(group)
-        self.plan = QComboBox()
+        form = _form(group)
+        self.plan = ElidingComboBox()
         for name, make_plan in MEASUREMENT_PLANS.items():
-            what = {"paper": ", as in the paper", "paper+greys": ", with greys and mixtures",
-                    "apl": ", windows on surrounds", "paper+apl": ", with the APL block",
-                    "authors-2024": ", the authors' own protocol with a grey ramp"}
-            self.plan.addItem(f"{name} ({len(make_plan(0))} patches{what.get(name, '')})", name)
+            self.plan.addItem(f"{name} ({len(make_plan(0))} patches)", name)
+            if name in PLAN_DESCRIPTIONS:
+                self.plan.setItemData(self.plan.count() - 1, PLAN_DESCRIPTIONS[name], Qt.ItemDataRole.ToolTipRole)
         self.plan.addItem("from a file…", "file")
         form.addRow("plan", self.plan)
         row = QHBoxLayout()
         self.plan_file = QLineEdit()
         self.plan_file.setPlaceholderText("CSV with columns kind,r,g,b")
-        browse = QPushButton("…")
+        browse = QToolButton(text="…", toolTip="choose a plan file")
         browse.clicked.connect(self._choose_plan_file)
         row.addWidget(self.plan_file, 1)
         row.addWidget(browse)
@@ -162,10 +235,13 @@ class CalibrationForm(QWidget):
         form.addRow("seed", self.seed)
         self.estimate = QLabel("")
         self.estimate.setWordWrap(True)
+        self.estimate.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
         form.addRow("estimate", self.estimate)
         row = QHBoxLayout()
         self.out_dir = QLineEdit(str(Path(tempfile.gettempdir()) / "vr-workbench-calibration"))
-        out_browse = QPushButton("…")
+        out_browse = QToolButton(text="…", toolTip="choose the output directory")
+        self.out_dir.setToolTip(self.out_dir.text())  # a long path shows whole here
+        self.out_dir.textChanged.connect(self.out_dir.setToolTip)
         out_browse.clicked.connect(self._choose_out_dir)
         row.addWidget(self.out_dir, 1)
         row.addWidget(out_browse)
@@ -207,6 +283,14 @@ class CalibrationForm(QWidget):
         self.identify.setEnabled(kind == "window")
         self.tcp.setEnabled(kind == "tcp")
         self.test_tcp.setEnabled(kind == "tcp")
+        # Only the chosen display's settings: the form then fits a 1366 × 768 screen without scrolling.
+        self._display_form.setRowVisible(self._screen_row, kind == "window")
+        self._display_form.setRowVisible(self._tcp_row, kind == "tcp")
+        self._display_form.setRowVisible(self.tcp_status, kind == "tcp" and bool(self.tcp_status.text()))
+
+    def _set_tcp_status(self, text: str) -> None:
+        self.tcp_status.setText(text)
+        self._display_changed()  # its row shows once it has something to say
 
     def _choose_plan_file(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Plan file", "", "CSV plan (*.csv)")
@@ -230,12 +314,12 @@ class CalibrationForm(QWidget):
         try:
             host, port = self.tcp_address()
         except WorkbenchError as error:
-            self.tcp_status.setText(f"✗ {error}")
+            self._set_tcp_status(f"✗ {error}")
             return
-        self.tcp_status.setText(f"connecting to {host}:{port}…")
+        self._set_tcp_status(f"connecting to {host}:{port}…")
         worker = CallWorker(lambda: check_tcp_display(host, port))
-        worker.done.connect(lambda name: self.tcp_status.setText(f"✓ connected: {name}"))
-        worker.failed.connect(lambda message: self.tcp_status.setText(f"✗ {message}"))
+        worker.done.connect(lambda name: self._set_tcp_status(f"✓ connected: {name}"))
+        worker.failed.connect(lambda message: self._set_tcp_status(f"✗ {message}"))
         worker.finished.connect(lambda: self._workers.remove(worker))
         self._workers.append(worker)
         worker.start()
@@ -278,5 +362,7 @@ class CalibrationForm(QWidget):
             self.estimate.setText(f"<span style='color:#b03a2e'>{error}</span>")
             return
         kinds = ", ".join(f"{n} {k}" for k, n in estimate.counts.items())
-        self.estimate.setText(f"<b>{estimate.patches} patches</b> ({kinds}); instrument time about "
+        what = PLAN_DESCRIPTIONS.get(self.plan.currentData())
+        self.estimate.setText((f"{what[0].upper()}{what[1:]}: " if what else "") +
+                              f"<b>{estimate.patches} patches</b> ({kinds}); instrument time about "
                               f"<b>{format_duration(estimate.instrument_s)}</b> (dark patches take longest)")
