@@ -46,6 +46,9 @@ __all__ = [
     "model_choice_reason",
     "summary_lines",
     "detail_lines",
+    "CheckedRow",
+    "checked_rows",
+    "CHECKED_KEYS",
     "VERDICT_KEYS",
     "SHOWN_APART",
     "FINDING_PLOTS",
@@ -472,3 +475,98 @@ def detail_lines(diagnosis) -> tuple:
         else:
             lines.append((key, _text(value)))
     return tuple(lines)
+
+
+CHECKED_KEYS = ("checked", "untested")
+"""Top-level entries of ``to_json()`` the page shows as the table of checked effects (:func:`checked_rows`)."""
+
+
+@dataclass(frozen=True)
+class CheckedRow:
+    """An effect that was checked and not found (or could not be tested), as a row of text cells.
+
+    ``test``: z against the critical value (``"0.50 < 2.33"``); ``statistic``: the effect's size ±
+    its standard error; ``impact``: mean ΔE00 on the fixed colours; ``model``: whether it is in the
+    model, or why not; ``evidence``: everything the diagnosis said about it (the row's tooltip).
+    """
+
+    effect: str
+    test: str
+    statistic: str
+    impact: str
+    model: str
+    evidence: str
+    significant: bool = False
+    in_model: bool = False
+    testable: bool = True
+
+
+def _number_or_none(value):
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+
+
+def _test_cell(record: dict) -> str:
+    z, critical = _number_or_none(record.get("z")), _number_or_none(record.get("critical_z"))
+    p_value = _number_or_none(record.get("p_value"))
+    if z is None:  # p 1 has no finite z
+        left = "—" if p_value is None else f"— (p {p_value:.2g})"
+        return left if critical is None else f"{left} / {critical:.2f}"
+    if critical is None:
+        return f"{z:.2f}"
+    return f"{z:.2f} {'≥' if z >= critical else '<'} {critical:.2f}"
+
+
+def _model_cell(record: dict, floor) -> str:
+    if record.get("in_model"):
+        note = str(record.get("cross_validation") or "")
+        return "yes" + (f": {note}" if note else "")
+    impact = _number_or_none(record.get("impact_dE00"))
+    if record.get("significant"):
+        note = str(record.get("cross_validation") or "")
+        if note:
+            return f"no: {note}"
+        if impact is not None and floor is not None and impact < floor:
+            return f"no: significant but immaterial (impact {impact:.2f} < {floor:g} ΔE00)"
+        return "no: significant but not material"
+    return "no: within noise"
+
+
+def checked_rows(diagnosis) -> tuple:
+    """Every effect in ``to_json()["checked"]``, then every one in ``["untested"]`` not checked, as rows.
+
+    An effect that could not be tested says why (the ``untested`` reason where there is one); the
+    others say whether they are in the model and, where not, why (within noise, or immaterial:
+    impact below the materiality floor of ``["significance"]``).
+    """
+    document = diagnosis.to_json()
+    floor = _number_or_none((document.get("significance") or {}).get("materiality_floor_dE00"))
+    untested = {}
+    for entry in document.get("untested") or []:
+        if isinstance(entry, dict):
+            untested[str(entry.get("effect", "?"))] = str(entry.get("reason") or "")
+        else:  # "effect: reason"
+            effect, _, reason = str(entry).partition(": ")
+            untested[effect] = reason
+    rows, seen = [], set()
+    for record in document.get("checked") or []:
+        if not isinstance(record, dict):
+            continue
+        effect = str(record.get("effect", "?"))
+        seen.add(effect)
+        evidence = str(record.get("evidence") or "")
+        statistic, error = _number_or_none(record.get("statistic")), _number_or_none(record.get("standard_error"))
+        impact = _number_or_none(record.get("impact_dE00"))
+        testable = record.get("testable") is not False
+        if testable:
+            test = _test_cell(record)
+            size = ("—" if statistic is None
+                    else f"{statistic:.3g}" + (f" ± {error:.2g}" if error is not None else ""))
+            model = _model_cell(record, floor)
+        else:
+            reason = untested.get(effect) or evidence.removeprefix("not testable: ")
+            test, size, model = "not testable", "—", f"not testable: {reason}"
+        rows.append(CheckedRow(effect, test, size, "—" if impact is None else f"{impact:.2f}", model, evidence,
+                               bool(record.get("significant")), bool(record.get("in_model")), testable))
+    rows += [CheckedRow(effect, "not tested", "—", "—", f"not tested: {reason}", reason, testable=False)
+             for effect, reason in untested.items() if effect not in seen]
+    return tuple(rows)

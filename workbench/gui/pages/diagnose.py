@@ -2,8 +2,11 @@
 
 Shows whatever :func:`workbench.diagnostics.diagnose` returned (through
 :mod:`workbench.gui.diagnosis_views`): the verdict (every top-level entry of
-``to_json()``), the model the profile exports (a table of the candidates'
-cross-validated ΔE00, the chosen one marked, and why), the findings as cards
+``to_json()``; the effects checked and not found, or not testable, as a table:
+effect, z against the critical value, statistic ± SE, impact, in the model or
+why not, the evidence in the row's tooltip; "Other entries" shows the rest of
+``to_json()`` in its place), the model the profile exports (a table of the
+candidates' cross-validated ΔE00, the chosen one marked, and why), the findings as cards
 with their evidence and a plot each (a consequence of another finding
 indented under its cause, tagged "consequence of …"), per-channel sweep fits
 with residuals (baseline vs extended), additivity, chromaticity vs drive, the
@@ -28,9 +31,20 @@ from pathlib import Path
 
 from PySide6.QtCore import QTimer, QUrl, Qt, Signal
 from PySide6.QtGui import QDesktopServices
-from PySide6.QtWidgets import QHBoxLayout, QLabel, QPushButton, QSplitter, QTextBrowser, QVBoxLayout, QWidget
+from PySide6.QtWidgets import (
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSizePolicy,
+    QSplitter,
+    QStackedWidget,
+    QTextBrowser,
+    QVBoxLayout,
+    QWidget,
+)
 
 from workbench.gui import diagnosis_views as views
+from workbench.gui.widgets.checked_table import CheckedTable
 from workbench.gui.widgets.finding_cards import FindingCards
 from workbench.gui.widgets.fit_plots import FitPlots
 from workbench.gui.widgets.validation_table import ValidationHistogram, ValidationTable
@@ -62,9 +76,21 @@ class DiagnosePage(QWidget):
         self.summary = QLabel("")
         self.summary.setWordWrap(True)
         self.summary.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        # What was checked and not found is a table; everything else the diagnosis returned is one
+        # click away, in the table's place and as high (it scrolls).
+        self.checked = CheckedTable()
         self.details = QTextBrowser()
-        self.details.setMaximumHeight(110)
+        self.details.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Ignored)
         self.details.setToolTip("everything else the diagnosis returned")
+        self.checked_stack = QStackedWidget()
+        self.checked_stack.addWidget(self.checked)
+        self.checked_stack.addWidget(self.details)
+        self.checked_stack.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Maximum)
+        self.details_button = QPushButton("Other entries")
+        self.details_button.setCheckable(True)
+        self.details_button.setToolTip("show everything else the diagnosis returned in place of the table of the "
+                                       "effects checked and not found (click again for the table)")
+        self.details_button.toggled.connect(lambda shown: self.checked_stack.setCurrentIndex(int(shown)))
         self.report_button = QPushButton("Open report")
         self.report_button.setToolTip("write the HTML report of this diagnosis and open it in the browser")
         self.report_button.clicked.connect(self.open_report)
@@ -83,8 +109,12 @@ class DiagnosePage(QWidget):
 
         header = QHBoxLayout()
         header.addWidget(self.summary, 2)
-        header.addWidget(self.details, 3)
-        header.addWidget(self.report_button, 0, Qt.AlignmentFlag.AlignTop)
+        header.addWidget(self.checked_stack, 3)
+        buttons = QVBoxLayout()
+        buttons.addWidget(self.report_button)
+        buttons.addWidget(self.details_button)
+        buttons.addStretch(1)
+        header.addLayout(buttons)
         right = QSplitter(Qt.Orientation.Vertical)
         right.addWidget(self.table)
         right.addWidget(self.histogram)
@@ -107,10 +137,14 @@ class DiagnosePage(QWidget):
             self.summary.setText("<i>No diagnosis yet: run a calibration, or open a session CSV, .ti3, .mat, "
                                  "measurement directory or profile (File ▸ Open).</i>")
             self.details.setHtml("")
+            details = ()
         else:
             self.summary.setText("<br>".join(f"<b>{key}</b>: {text}" for key, text in views.summary_lines(diagnosis)))
-            self.details.setHtml("<br>".join(f"<b>{key}</b>: {html.escape(text)}"
-                                             for key, text in views.detail_lines(diagnosis)))
+            details = tuple((key, text) for key, text in views.detail_lines(diagnosis)
+                            if key not in views.CHECKED_KEYS)
+            self.details.setHtml("<br>".join(f"<b>{key}</b>: {html.escape(text)}" for key, text in details))
+        self.checked.show_diagnosis(diagnosis)
+        self.details_button.setText(f"Other entries ({len(details)})")
         self.follow_up = self._propose(diagnosis)
         follow_up = self.follow_up
         if follow_up is not None and follow_up.patches:
