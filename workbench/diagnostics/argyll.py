@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench.colorimetry import delta_E2000
+from workbench.diagnostics.peer_score import PeerScore, peer_score
 from workbench.errors import WorkbenchError
 from workbench.session import Session
 
@@ -50,25 +51,8 @@ def argyll_missing() -> str | None:
     return None
 
 
-@dataclass(frozen=True)
-class ArgyllScore:
-    """Argyll's shaper + matrix profile scored on the validation colours.
-
-    ``unavailable`` is the reason when there is no score (Argyll missing, or
-    nothing held out); the figures are then None.
-    """
-
-    model: str
-    n: int = 0
-    mean_dE00: float | None = None
-    p95_dE00: float | None = None
-    max_dE00: float | None = None
-    unavailable: str = ""
-
-    def to_json(self) -> dict:
-        return {"model": self.model, "n": self.n, "mean_dE00": self.mean_dE00,
-                "p95_dE00": self.p95_dE00, "max_dE00": self.max_dE00,
-                "unavailable": self.unavailable or None}
+ArgyllScore = PeerScore
+"""Argyll's shaper + matrix profile scored on the validation colours (a :class:`PeerScore`)."""
 
 
 def write_fit_ti3(session: Session, path) -> Path:
@@ -146,6 +130,4 @@ def score_argyll(session: Session) -> ArgyllScore:
     with tempfile.TemporaryDirectory(prefix="argyll-peer-") as folder:
         profile = fit_argyll_shaper_matrix(fit_rows, folder)
         predicted = profile.forward(validation.rgb)
-    dE = np.atleast_1d(delta_E2000(predicted, validation.XYZ, white))
-    return ArgyllScore(model, n=int(dE.size), mean_dE00=float(dE.mean()),
-                       p95_dE00=float(np.percentile(dE, 95)), max_dE00=float(dE.max()))
+    return peer_score(model, delta_E2000(predicted, validation.XYZ, white))

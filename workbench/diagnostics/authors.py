@@ -39,6 +39,7 @@ import numpy as np
 from workbench.colorimetry import delta_E2000
 from workbench.display.extended import ChannelInteraction, ExtendedDisplay
 from workbench.display.tone_curves import fit_tone_curve
+from workbench.diagnostics.peer_score import PeerScore, peer_score
 from workbench.errors import InputError
 from workbench.session import Session
 
@@ -214,21 +215,8 @@ def _axis_ratio(session: Session, points: GreyRampPoints, tone) -> ChannelIntera
                               axis_ratio=tuple(table))
 
 
-@dataclass(frozen=True)
-class AuthorsScore:
-    """The authors' method scored on the validation colours (``unavailable``: why not)."""
-
-    model: str
-    n: int = 0
-    mean_dE00: float | None = None
-    p95_dE00: float | None = None
-    max_dE00: float | None = None
-    unavailable: str = ""
-
-    def to_json(self) -> dict:
-        return {"model": self.model, "n": self.n, "mean_dE00": self.mean_dE00,
-                "p95_dE00": self.p95_dE00, "max_dE00": self.max_dE00,
-                "unavailable": self.unavailable or None}
+AuthorsScore = PeerScore
+"""The authors' method scored on the validation colours (a :class:`PeerScore`)."""
 
 
 def score_authors_method(session: Session) -> AuthorsScore:
@@ -242,7 +230,5 @@ def score_authors_method(session: Session) -> AuthorsScore:
         model = fit_grey_ramp_linearisation(session)
     except InputError as error:
         return AuthorsScore(AUTHORS_METHOD, unavailable=str(error))
-    dE = np.atleast_1d(delta_E2000(model.forward(validation.rgb), validation.XYZ,
-                                   session.white_XYZ))
-    return AuthorsScore(model.describe(), n=int(dE.size), mean_dE00=float(dE.mean()),
-                        p95_dE00=float(np.percentile(dE, 95)), max_dE00=float(dE.max()))
+    return peer_score(model.describe(), delta_E2000(model.forward(validation.rgb),
+                                                    validation.XYZ, session.white_XYZ))
