@@ -153,7 +153,8 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     that interpolates the fit rows a little better than noise allows costs
     held-out accuracy. Where ``channel-interaction`` was found the display is
     not additive, the correction answers it, and lowering the error is
-    enough.
+    enough. A grey-ramp candidate replaces the model of an identified cause
+    (``power-limit``) only beyond noise.
     """
     def score(errors):
         return float("inf") if errors is None else group_mean(*errors)
@@ -173,7 +174,10 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                 drift=drift)
             scores[name] = score(errors)
             gain, standard_error = paired_gain(chosen_errors, errors)
-            noise_tested = name in NOISE_TESTED_CANDIDATES and "channel-interaction" not in found
+            # the sweep correction must beat noise on a display not found non-additive, and any
+            # flexible candidate must to replace the model of an identified cause
+            noise_tested = ((name in NOISE_TESTED_CANDIDATES and "channel-interaction" not in found)
+                            or (chosen in IDENTIFIED_CANDIDATES and name != chosen))
             needed = (CV_Z * standard_error if noise_tested else
                       -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES else 0.0)
             if gain > needed and np.isfinite(scores[name]):
