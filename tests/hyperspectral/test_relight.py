@@ -286,3 +286,58 @@ def test_no_texel_is_unreachable_for_the_colorchecker_under_d65(ces_samples_text
     assert relight_level2_full_band(checker, d65, display).unreachable == 0
     assert not level2_texture(checker.texels(), d65.sd, display,
                               wavelengths=checker.wavelengths).unreachable.any()
+
+
+# --- the compiled kernel's cells: one look-up and one comparison give the runtime's DAC --------
+
+
+def _count_at_or_below(thresholds, u):
+    return np.stack([np.searchsorted(thresholds[c], u[..., c], side="right") for c in range(3)],
+                    axis=-1)
+
+
+@pytest.mark.parametrize("display_id", sorted(DISPLAYS))
+def test_dac_cells_count_the_thresholds_as_the_runtime_does(rng, display_id):
+    from workbench.hyperspectral.channel_inverse import dac_cells
+    from workbench.hyperspectral.level2_texels import level2_texel_table
+
+    thresholds = channel_inverse_lut(DISPLAYS[display_id]).thresholds[:, 1:256]
+    cells = dac_cells(thresholds)
+    assert cells is not None and cells.cells >= 512
+    reached = thresholds.T[np.isfinite(thresholds.T).all(axis=1)]
+    u = np.concatenate([rng.uniform(0, 1, (50000, 3)), reached,
+                        np.nextafter(reached, 0), np.nextafter(reached, 2),
+                        [[0, 0, 0], [1, 1, 1]]]).astype(np.float32)
+    np.testing.assert_array_equal(cells.dac(u), _count_at_or_below(thresholds, u))
+    # packed for the kernel: the threshold's bits, then the texels below and at or above it
+    table = level2_texel_table(light_colour_of("cie-a", DISPLAYS[display_id]))
+    packed = cells.texel_cells(table)
+    assert packed.dtype == np.uint64 and packed.shape == (3, cells.cells)
+    np.testing.assert_array_equal((packed & 0xFFFFFFFF).astype(np.uint32).view(np.float32),
+                                  cells.threshold)
+    np.testing.assert_array_equal((packed >> 32) & 0xFF, table[np.arange(3)[:, None], cells.below])
+    np.testing.assert_array_equal((packed >> 40) & 0xFF, table[np.arange(3)[:, None], cells.above])
+
+
+def light_colour_of(source, display):
+    from workbench.colour_management import light_colour
+
+    return light_colour(get_illuminant(source).sd, display).linear
+
+
+def test_dac_cells_of_tied_and_unreached_levels():
+    from workbench.hyperspectral.channel_inverse import dac_cells
+
+    # levels 1–3 start at drive 0 (a display whose black is DAC 3), levels 251–255 never come
+    row = np.concatenate([[0.0, 0.0, 0.0], np.linspace(0.01, 0.99, 247), [2.0] * 5])
+    thresholds = np.stack([row, row, np.sqrt(np.linspace(0, 1, 255))]).astype(np.float32)
+    cells = dac_cells(thresholds)
+    u = np.array([[0, 0, 0], [0.5, 0.5, 0.5], [1, 1, 1], [0.01, 0.01, 0.0]], np.float32)
+    np.testing.assert_array_equal(cells.dac(u), _count_at_or_below(thresholds, u))
+    assert cells.dac(u)[0, 0] == 3 and cells.dac(u)[2, 0] == 250
+    assert cells.reach_limits([0, 251, 256]).tolist() == [-np.inf, np.inf, np.inf]
+    assert cells.reach_limits([4, 1, 255])[0] == np.float32(0.01)
+    assert dac_cells(thresholds[:, ::-1]) is None                     # not sorted
+    close = thresholds.copy()
+    close[2, 100] = np.nextafter(close[2, 101], np.float32(0))        # two levels 1 ulp apart
+    assert dac_cells(close) is None

@@ -19,6 +19,13 @@ Models that are not separable (3D-LUT residuals, channel interactions) raise
 :class:`InputError` here; the level-2 relighting then uses the model's own
 inverse (:func:`workbench.hyperspectral.relight.relight_texels`, kernel
 ``"numpy"``).
+
+For the compiled kernel the same count is re-cut into :class:`DacCells`
+(:func:`dac_cells`): cells of ``u`` fine enough that each holds at most one
+threshold value, so that one look-up and one comparison give the DAC — and,
+folded with a light's texel table (:meth:`DacCells.texel_cells`), the level-2
+texel. Any thresholds in this form will do: this module's, or a runtime
+bundle's (:class:`workbench.export.runtime_inverse.RuntimeDisplayInverse`).
 """
 
 from __future__ import annotations
@@ -33,7 +40,9 @@ from workbench.errors import InputError
 __all__ = [
     "DEFAULT_LUT_CELLS",
     "ChannelInverseLUT",
+    "DacCells",
     "channel_inverse_lut",
+    "dac_cells",
     "is_channel_separable",
 ]
 
@@ -159,3 +168,112 @@ def channel_inverse_lut(display: DisplayModel, cells: int = DEFAULT_LUT_CELLS) -
     return ChannelInverseLUT(XYZ_to_drive=matrix, drive_offset=offset,
                              thresholds=np.ascontiguousarray(thresholds),
                              cell_dac=np.ascontiguousarray(cell_dac))
+
+
+MIN_DAC_CELLS = 512
+"""Fewest cells :func:`dac_cells` tries (3 × 512 packed entries, 12 KB: in L1 cache)."""
+
+MAX_DAC_CELLS = 1 << 16
+"""Most cells :func:`dac_cells` tries before giving up on a curve (two thresholds closer
+than this resolves)."""
+
+
+@dataclass(frozen=True, eq=False)
+class DacCells:
+    """Integer DAC from ``u = √drive`` in one look-up and one comparison, per channel.
+
+    ``u`` (float32, 0..1) falls in cell ``j = ⌊u (L − 1)⌋`` (float32
+    arithmetic). Each cell, widened by the rounding of that product, holds at
+    most one distinct threshold value ``threshold[c, j]`` (+inf: none); the DAC
+    is ``below[c, j]`` for ``u`` under it and ``above[c, j]`` at or over it —
+    exactly the number of thresholds ``≤ u``, as a runtime counts them.
+
+    Attributes
+    ----------
+    threshold : ndarray (3, L), float32
+    below, above : ndarray (3, L), int32
+    thresholds : ndarray (3, 255), float32
+        The sorted thresholds the cells were cut from (level ``v`` starts at
+        ``thresholds[c, v − 1]``).
+    """
+
+    threshold: np.ndarray
+    below: np.ndarray
+    above: np.ndarray
+    thresholds: np.ndarray
+
+    @property
+    def cells(self) -> int:
+        """L, the cells per channel."""
+        return self.threshold.shape[1]
+
+    def dac(self, u) -> np.ndarray:
+        """Integer DAC ``(..., 3)`` for ``u`` ``(..., 3)`` (float32, 0..1) through the cells."""
+        u = np.asarray(u, dtype=np.float32)
+        cell = (u * np.float32(self.cells - 1)).astype(np.int64)
+        channels = np.arange(3)
+        return np.where(u >= self.threshold[channels, cell], self.above[channels, cell],
+                        self.below[channels, cell])
+
+    def texel_cells(self, texel_table: np.ndarray) -> np.ndarray:
+        """``(3, L)`` uint64 packed per cell for the compiled kernel: the threshold's float32
+        bits (low 32 bits), the texel below it (bits 32–39) and at or above it (40–47),
+        from a light's ``(3, 256)`` level-2 texel table."""
+        table = np.asarray(texel_table, dtype=np.uint64)
+        channels = np.arange(3)[:, None]
+        bits = self.threshold.view(np.uint32).astype(np.uint64)
+        return np.ascontiguousarray(bits | (table[channels, self.below] << np.uint64(32))
+                                    | (table[channels, self.above] << np.uint64(40)))
+
+    def reach_limits(self, levels) -> np.ndarray:
+        """``(3,)`` float32: the smallest ``u`` whose DAC is ≥ ``levels[c]`` per channel
+        (−inf for level 0, +inf for 256 or a level never reached)."""
+        limits = np.empty(3, dtype=np.float32)
+        for channel, level in enumerate(np.asarray(levels, dtype=np.int64)):
+            if level <= 0:
+                limits[channel] = -np.inf
+            elif level > 255 or not self.thresholds[channel, level - 1] <= 1.0:
+                limits[channel] = np.inf
+            else:
+                limits[channel] = self.thresholds[channel, level - 1]
+        return limits
+
+
+def dac_cells(thresholds) -> DacCells | None:
+    """:class:`DacCells` of sorted per-channel thresholds ``(3, 255)`` (the smallest
+    ``u = √drive`` of each DAC level 1..255; a value above 1, or +inf, for a level never
+    reached); None if the thresholds are not sorted or two distinct ones lie closer than
+    :data:`MAX_DAC_CELLS` cells resolve.
+
+    Cells double from :data:`MIN_DAC_CELLS` until every one, widened by a thousandth of
+    a cell plus the float32 rounding of ``u (L − 1)``, holds at most one distinct
+    threshold value.
+    """
+    values = np.asarray(thresholds, dtype=np.float32)
+    if values.shape != (3, 255) or np.any(np.isnan(values)) or np.any(np.diff(values, axis=1) < 0):
+        return None
+    exact = values.astype(np.float64)
+    cells = MIN_DAC_CELLS
+    while cells <= MAX_DAC_CELLS:
+        pad = 1e-3 + cells * 2.0 ** -22      # |float32 u·(L−1) − u·(L−1)| ≤ L·2⁻²⁴ cells
+        index = np.arange(cells, dtype=np.float64)
+        low, high = (index - pad) / (cells - 1), (index + 1 + pad) / (cells - 1)
+        threshold = np.empty((3, cells), dtype=np.float32)
+        below = np.empty((3, cells), dtype=np.int32)
+        above = np.empty((3, cells), dtype=np.int32)
+        for channel in range(3):
+            row = exact[channel]
+            base = np.searchsorted(row, low, side="right")         # thresholds ≤ the cell's low end
+            top = np.searchsorted(row, high, side="right")         # … ≤ its high end
+            following = np.where(base < 255, row[np.minimum(base, 254)], np.inf)
+            reached = np.searchsorted(row, following, side="right")  # every threshold equal to it
+            if np.any(top > reached):
+                break
+            threshold[channel] = following
+            below[channel] = base
+            above[channel] = np.minimum(reached, 255)
+        else:
+            return DacCells(threshold=threshold, below=below, above=above,
+                            thresholds=np.ascontiguousarray(values))
+        cells *= 2
+    return None

@@ -41,7 +41,9 @@ from workbench.errors import InputError
 from workbench.hyperspectral.basis import BasisCube, SpectralBasis
 from workbench.hyperspectral.channel_inverse import (
     ChannelInverseLUT,
+    DacCells,
     channel_inverse_lut,
+    dac_cells,
     is_channel_separable,
 )
 from workbench.hyperspectral.cube import ReflectanceCube
@@ -202,15 +204,32 @@ def plan_relight(basis: SpectralBasis, illuminant, display: DisplayModel | None 
                        inverse_lut=lut, drive_matrix=drive_matrix, drive_offset=drive_offset)
 
 
+_DAC_CELLS: "weakref.WeakKeyDictionary[ChannelInverseLUT, DacCells | None]" = \
+    weakref.WeakKeyDictionary()
+
+
+def _dac_cells(lut: ChannelInverseLUT) -> DacCells | None:
+    """The inverse's thresholds as the compiled kernel's cells (built once per table)."""
+    try:
+        return _DAC_CELLS[lut]
+    except KeyError:
+        cells = dac_cells(lut.thresholds[:, 1:256])
+        _DAC_CELLS[lut] = cells
+        return cells
+
+
 def _relight_numba(planes: np.ndarray, plan: RelightPlan, out: np.ndarray) -> int:
     if plan.inverse_lut is None:
         raise InputError(f"kernel 'numba' needs a display separable per channel; "
                          f"{plan.display.describe()!r} is not: use kernel 'numpy'")
+    cells = _dac_cells(plan.inverse_lut)
+    if cells is None:   # two DAC levels closer than the cells resolve: the model's own inverse
+        return _relight_numpy(planes, plan, out)
     from workbench.hyperspectral.relight_numba import relight_level2_planes_numba
 
     return relight_level2_planes_numba(planes, plan.drive_matrix, plan.drive_offset,
-                                       plan.inverse_lut.cell_dac, plan.inverse_lut.thresholds,
-                                       plan.texel_table, plan.unreachable_dac, out)
+                                       cells.texel_cells(plan.texel_table),
+                                       cells.reach_limits(plan.unreachable_dac), out)
 
 
 def _relight_numpy(planes: np.ndarray, plan: RelightPlan, out: np.ndarray) -> int:
