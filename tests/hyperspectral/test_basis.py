@@ -110,13 +110,13 @@ def test_too_few_samples_to_hold_any_out_is_an_error():
 
 
 def test_benchmark_sets_are_disjoint_by_material():
-    from workbench.hyperspectral.benchmark import (
+    from workbench.hyperspectral.materials import (
         TEST_MATERIALS,
         TRAINING_MATERIALS,
         VALIDATION_MATERIALS,
         held_out_material_sets,
+        material_reflectances,
     )
-    from workbench.hyperspectral.materials import material_reflectances
 
     assert len({TRAINING_MATERIALS, VALIDATION_MATERIALS, *TEST_MATERIALS}) == 4
     seen = np.vstack([material_reflectances(TRAINING_MATERIALS, WAVELENGTHS),
@@ -134,16 +134,16 @@ def test_benchmark_sets_are_disjoint_by_material():
 
 
 def test_basis_accuracy_held_out_by_material():
-    """The benchmark's split: fitted on CIE 2017 samples, K chosen on the CIE 13.3 samples,
+    """The split by material: fitted on CIE 2017 samples, K chosen on the CIE 13.3 samples,
     accurate on the ColorChecker and the NIST CQS samples, which neither step saw."""
-    from workbench.hyperspectral.benchmark import (
-        BENCHMARK_TARGET_MAX_DE00,
+    from workbench.hyperspectral.materials import (
+        HELD_OUT_TARGET_MAX_DE00,
         held_out_material_sets,
     )
 
     training, validation, test = held_out_material_sets(WAVELENGTHS)
     basis = fit_spectral_basis(training, WAVELENGTHS, held_out=validation,
-                               target_max_dE00=BENCHMARK_TARGET_MAX_DE00,
+                               target_max_dE00=HELD_OUT_TARGET_MAX_DE00,
                                sources=tuple(dict.fromkeys(BASIS_SOURCES + ACCURACY_SOURCES)))
     assert basis.meets_target
     for name, reflectances in test.items():

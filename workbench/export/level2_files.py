@@ -32,12 +32,20 @@ fitted on) and ``probe_share`` of the library's materials and their mixtures
 basis was fitted on, the probe guards against others), under every light of
 the bundle.
 
+The same method relights in the workbench (``relight``, ``bench relight``):
+:func:`runtime_texture` holds a cube as the bundle would (its K + S float16
+channels, chosen as above), :func:`relight_runtime_texture` relights it under
+one light with the runtime's arithmetic (:func:`runtime_level2_texels`: NumPy
+as the reference consumer, or the fused compiled kernel where the display
+needs no correction table).
+
 Scale: reflectance 0..1; drive 0..1; DAC and texels 8-bit integers.
 """
 
 from __future__ import annotations
 
 import json
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -52,6 +60,7 @@ from workbench.export.runtime_inverse import RuntimeDisplayInverse
 from workbench.fileio import atomic_writer
 from workbench.hyperspectral import (
     ReflectanceCube,
+    RelitTexture,
     authored_srgb8_cube,
     fit_cube_basis,
     plan_relight,
@@ -59,6 +68,7 @@ from workbench.hyperspectral import (
     write_png_rgb8,
 )
 from workbench.hyperspectral.basis import SpectralBasis, split_held_out
+from workbench.hyperspectral.channel_inverse import DacCells, dac_cells
 from workbench.hyperspectral.level2_texels import level2_texel_table
 from workbench.hyperspectral.resampling import XYZ_band_weights
 
@@ -70,10 +80,15 @@ __all__ = [
     "MAX_SPLIT",
     "MAX_BUNDLE_COMPONENTS",
     "DEFAULT_PROBE_SHARE",
+    "RUNTIME_KERNELS",
+    "RuntimeTexture",
     "probe_reflectances",
+    "resolve_runtime_kernel",
     "level2_light",
     "encode_channels",
     "runtime_level2_texels",
+    "runtime_texture",
+    "relight_runtime_texture",
     "choose_cube_basis",
     "write_json",
     "write_level2_cube",
@@ -183,16 +198,78 @@ def level2_light(basis: SpectralBasis, illuminant, display: DisplayModel,
                        unreachable_dac=plan.unreachable_dac)
 
 
+RUNTIME_KERNELS = ("numpy", "numba")
+"""Implementations of the runtime's level-2 arithmetic (:func:`runtime_level2_texels`)."""
+
+_CELLS: "weakref.WeakKeyDictionary[RuntimeDisplayInverse, DacCells | None]" = \
+    weakref.WeakKeyDictionary()
+
+
+def _compiled_cells(inverse: RuntimeDisplayInverse) -> DacCells | None:
+    """The inverse's thresholds as the compiled kernel's cells; None where the kernel cannot
+    run it (a correction table, or thresholds closer than its cells resolve)."""
+    try:
+        return _CELLS[inverse]
+    except KeyError:
+        cells = None if inverse.correction is not None else dac_cells(inverse.thresholds)
+        _CELLS[inverse] = cells
+        return cells
+
+
+def resolve_runtime_kernel(inverse: RuntimeDisplayInverse, kernel: str = "auto") -> str:
+    """The kernel :func:`runtime_level2_texels` runs for ``kernel`` (``"auto"`` resolved)."""
+    if kernel not in (*RUNTIME_KERNELS, "auto"):
+        raise InputError(f"unknown relight kernel {kernel!r}; use one of "
+                         f"{', '.join(RUNTIME_KERNELS)} or auto")
+    if kernel == "auto":
+        return "numba" if _compiled_cells(inverse) is not None else "numpy"
+    if kernel == "numba" and _compiled_cells(inverse) is None:
+        raise InputError("kernel 'numba' runs a display inverse without a correction table "
+                         f"({inverse.model} has one, or DAC levels too close for its cells); "
+                         "use kernel 'numpy'")
+    return kernel
+
+
 def runtime_level2_texels(planes: np.ndarray, light: Level2Light,
-                          inverse: RuntimeDisplayInverse) -> tuple[np.ndarray, int]:
-    """The runtime's level-2 texels ``(N, 3)`` uint8 from float16 planes ``(K, N)`` and the
-    number of texels the light cannot carry (float32 throughout, as a shader)."""
+                          inverse: RuntimeDisplayInverse, *, kernel: str = "numpy",
+                          out: np.ndarray | None = None, threads: int | None = None
+                          ) -> tuple[np.ndarray, int]:
+    """The runtime's level-2 texels ``(N, 3)`` uint8 from float16 planes ``(C, N)`` and the
+    number of texels the light cannot carry (float32 throughout, as a shader).
+
+    ``kernel``: ``"numpy"`` computes as the reference consumer does;
+    ``"numba"`` is the fused compiled kernel
+    (:mod:`workbench.hyperspectral.relight_numba`: the same count of thresholds,
+    the channel sum with fused multiply-adds in channel order, so a texel whose
+    drive lies within float32 rounding of a threshold may differ), for an
+    inverse without a correction table; ``"auto"``: ``"numba"`` where it can
+    run, else ``"numpy"``. ``out`` (``(N, 3)`` uint8) receives the texels;
+    ``threads`` as the compiled kernel's.
+    """
+    kernel = resolve_runtime_kernel(inverse, kernel)
+    count = np.shape(planes)[1]
+    if out is not None and (out.shape != (count, 3) or out.dtype != np.uint8
+                            or not out.flags.c_contiguous):
+        raise InputError(f"out must be a C-contiguous uint8 array of shape {(count, 3)}")
+    if kernel == "numba":
+        cells = _compiled_cells(inverse)
+        from workbench.hyperspectral.relight_numba import relight_level2_planes_numba
+
+        out = np.empty((count, 3), dtype=np.uint8) if out is None else out
+        unreachable = relight_level2_planes_numba(
+            np.ascontiguousarray(planes, dtype=np.float16), light.drive_matrix,
+            light.drive_offset, cells.texel_cells(light.texel_table),
+            cells.reach_limits(light.unreachable_dac), out, threads=threads)
+        return out, unreachable
     coefficients = np.asarray(planes, dtype=np.float16).astype(np.float32)
     drive = coefficients.T @ light.drive_matrix + light.drive_offset
     dac = inverse.dac_from_affine_drive(drive)
     texels = light.texel_table[np.arange(3), dac]
     unreachable = int(np.count_nonzero(np.any(dac >= light.unreachable_dac, axis=-1)))
-    return texels.astype(np.uint8), unreachable
+    if out is None:
+        return texels.astype(np.uint8), unreachable
+    out[...] = texels
+    return out, unreachable
 
 
 @dataclass(frozen=True)
@@ -256,13 +333,7 @@ class ComponentChoice:
 
 def _largest_basis(cube: ReflectanceCube, components: int, **options) -> SpectralBasis:
     """The basis with the most components up to ``components`` the cube supports."""
-    while True:
-        try:
-            return fit_cube_basis(cube, components=components, **options)
-        except InputError:
-            if components <= 1:
-                raise
-            components -= 1  # a small cube has fewer independent components
+    return fit_cube_basis(cube, components=components, clip_components=True, **options)
 
 
 def _shares(runtime: np.ndarray, references: dict, light_id: str) -> float:
@@ -342,6 +413,100 @@ def choose_cube_basis(cube: ReflectanceCube, display: DisplayModel, illuminants:
     return basis, ComponentChoice(basis.components, split, MappingProxyType(identical),
                                   MappingProxyType(shares), MappingProxyType(probe_shares),
                                   MappingProxyType(tried), target_share, probe_share, len(held))
+
+
+@dataclass(frozen=True, eq=False)
+class RuntimeTexture:
+    """A cube as the runtime holds it: the float16 channels of its level-2 files, in memory.
+
+    Attributes
+    ----------
+    channels : ndarray (C, H, W), float16
+        The K basis coefficients, then the float16 rounding error of the first
+        S (:func:`encode_channels`).
+    basis : SpectralBasis
+    split : int
+        S.
+    choice : ComponentChoice or None
+        How K and S were chosen (None: imposed).
+    source : str
+    """
+
+    channels: np.ndarray
+    basis: SpectralBasis
+    split: int
+    choice: ComponentChoice | None
+    source: str
+
+    @property
+    def components(self) -> int:
+        """K."""
+        return self.basis.components
+
+    @property
+    def height(self) -> int:
+        return self.channels.shape[1]
+
+    @property
+    def width(self) -> int:
+        return self.channels.shape[2]
+
+    @property
+    def planes(self) -> np.ndarray:
+        """The channels ``(C, H·W)``, texels row-major."""
+        return self.channels.reshape(self.channels.shape[0], -1)
+
+
+def runtime_texture(cube: ReflectanceCube, display: DisplayModel, illuminants: Sequence,
+                    inverse: RuntimeDisplayInverse, *, k: float, observer: str,
+                    components: int | None = None, split: int = 0,
+                    target_share: float = DEFAULT_IDENTICAL_SHARE,
+                    probe_share: float = DEFAULT_PROBE_SHARE, seed: int = 0) -> RuntimeTexture:
+    """``cube`` as a bundle holds it: K + S chosen by :func:`choose_cube_basis` under
+    ``illuminants`` (``components`` None), or K = ``components`` and S = ``split`` imposed.
+
+    Raises
+    ------
+    InputError
+        ``split`` outside 0..K, or coefficients beyond the float16 range (a basis with more
+        components than the cube supports).
+    """
+    choice = None
+    if components is None:
+        basis, choice = choose_cube_basis(cube, display, illuminants, inverse, k=k,
+                                          observer=observer, target_share=target_share,
+                                          probe_share=probe_share, seed=seed)
+        split = choice.split
+    else:
+        basis = fit_cube_basis(cube, components=components, observer=observer, k=k, seed=seed)
+    with np.errstate(over="ignore"):
+        channels = encode_channels(cube, basis, split)
+    if not np.all(np.isfinite(channels)):
+        raise InputError(f"{cube.source}: its K = {basis.components} basis coefficients exceed "
+                         "the float16 range (a basis with more components than the cube "
+                         "supports); choose fewer")
+    return RuntimeTexture(np.ascontiguousarray(channels), basis, split, choice, cube.source)
+
+
+def relight_runtime_texture(texture: RuntimeTexture, illuminant, display: DisplayModel,
+                            inverse: RuntimeDisplayInverse, *, k: float, kernel: str = "auto",
+                            out: np.ndarray | None = None, weights: np.ndarray | None = None,
+                            threads: int | None = None) -> RelitTexture:
+    """The level-2 texture of ``texture`` under ``illuminant`` as the runtime computes it:
+    the light's record (:func:`level2_light`, the work of a lighting change) then the
+    per-texel arithmetic (:func:`runtime_level2_texels`). ``out``: ``(H, W, 3)`` uint8
+    reused; ``weights``: the source's band weights when known."""
+    light = level2_light(texture.basis, illuminant, display, inverse, k=k, split=texture.split,
+                         weights=weights)
+    shape = (texture.height, texture.width, 3)
+    if out is not None and (out.shape != shape or out.dtype != np.uint8
+                            or not out.flags.c_contiguous):
+        raise InputError(f"out must be a C-contiguous uint8 array of shape {shape}")
+    texels, unreachable = runtime_level2_texels(
+        texture.planes, light, inverse, kernel=kernel, threads=threads,
+        out=None if out is None else out.reshape(-1, 3))
+    return RelitTexture(texels=texels.reshape(shape), unreachable=int(unreachable),
+                        source=light.id)
 
 
 def write_json(path: Path, document: dict) -> None:

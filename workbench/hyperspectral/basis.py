@@ -295,7 +295,7 @@ def fit_spectral_basis(training, wavelengths, *, held_out=None, sources: Sequenc
                        target_max_dE00: float = DEFAULT_TARGET_MAX_DE00,
                        max_components: int = MAX_COMPONENTS, ridge: float = DEFAULT_RIDGE,
                        observer: str = DEFAULT_OBSERVER, k: float = DEFAULT_K,
-                       seed: int = 0) -> SpectralBasis:
+                       seed: int = 0, clip_components: bool = False) -> SpectralBasis:
     """Fit a colorimetrically weighted PCA basis and choose K by held-out accuracy (module doc).
 
     Parameters
@@ -324,6 +324,9 @@ def fit_spectral_basis(training, wavelengths, *, held_out=None, sources: Sequenc
     observer, k : as :mod:`workbench.colorimetry`.
     seed : int
         Seed of the held-out split.
+    clip_components : bool
+        With ``components``: keep at most as many as the training set supports
+        (its numerical rank) instead of refusing more.
 
     Returns
     -------
@@ -359,6 +362,8 @@ def fit_spectral_basis(training, wavelengths, *, held_out=None, sources: Sequenc
         return _accuracy(held_coefficients[:, :K], held_out, vectors[:K], mean, weights)
 
     if components is not None:
+        if clip_components and components > available:
+            components = available
         if not 1 <= components <= available:
             raise InputError(f"K={components} components: choose 1..{available} (the training set "
                              f"has {len(training)} reflectances of {wavelengths.size} bands)")
@@ -419,13 +424,15 @@ def fit_cube_basis(cube: ReflectanceCube, *, components: int | None = None,
                    target_max_dE00: float = DEFAULT_TARGET_MAX_DE00,
                    sources: Sequence[str] = BASIS_SOURCES, observer: str = DEFAULT_OBSERVER,
                    k: float = DEFAULT_K, training_texels: int = 16384,
-                   held_out_texels: int = 8192, seed: int = 0) -> SpectralBasis:
+                   held_out_texels: int = 8192, seed: int = 0,
+                   clip_components: bool = False) -> SpectralBasis:
     """A basis for ``cube``, fitted on a random sample of its texels, K chosen on others.
 
     Draws up to ``training_texels`` texels for the fit and up to
     ``held_out_texels`` *other* texels to choose K on (a fifth of the cube
     each way when it is small), then :func:`fit_spectral_basis`. A cube of
     fewer than :data:`MIN_SPLIT_SAMPLES` texels raises :class:`InputError`.
+    ``clip_components`` as :func:`fit_spectral_basis`.
     """
     texels = cube.texels()
     count = len(texels)
@@ -433,4 +440,5 @@ def fit_cube_basis(cube: ReflectanceCube, *, components: int | None = None,
     train_index, held_index = train_index[:training_texels], held_index[:held_out_texels]
     return fit_spectral_basis(texels[train_index], cube.wavelengths, held_out=texels[held_index],
                               sources=sources, components=components,
-                              target_max_dE00=target_max_dE00, observer=observer, k=k)
+                              target_max_dE00=target_max_dE00, observer=observer, k=k,
+                              clip_components=clip_components)

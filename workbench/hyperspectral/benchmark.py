@@ -1,31 +1,32 @@
-"""The relight benchmark: basis kernel vs the naive full-band path on a paper-sized cube.
+"""The relight benchmark: the runtime bundle's level-2 method, at its K + S, on a paper-sized cube.
 
-Procedure (:func:`benchmark_relight`). The basis is held out *by material*:
-it is fitted on one set of materials, K is chosen on a second and the
-accuracy is reported on a third (:mod:`workbench.hyperspectral.materials`),
-so the figure is not measured inside the span the basis was fitted on.
+Procedure (:func:`benchmark_relight`):
 
-1. training: a 128 × 128 cube of the 99 CIE 2017 samples mixed smoothly
-   (:func:`~workbench.hyperspectral.synthetic.synthesize_cube`), 101 bands
-   (380–780 nm, 4 nm, as the paper's cubes);
-2. validation (K is the smallest that meets ``target_max_dE00`` on it): the
-   15 CIE 13.3 test colour samples and a 64 × 128 cube of their mixtures;
-3. test (the accuracy reported): materials neither step saw — the 24
-   ColorChecker patches and the 15 NIST CQS samples, each set pure and as a
-   64 × 64 cube of its mixtures, plus :data:`TEST_TEXELS` random texels of the
-   timed cube;
-4. the timed cube: ``size × size`` texels of the test materials mixed
-   smoothly, float32, encoded to float16 coefficient planes;
-5. for each of D65, A, FL11 and the two-peak source: time a lighting change
-   (:func:`~workbench.hyperspectral.relight.plan_relight` with the source's
-   band weights cached, as a runtime keeps them, then the fused kernel, which
-   also counts the texels the light cannot carry) and the naive full-band path
-   (``(N, 101) @ (101, 3)`` float32, the display model's inverse, the texel
-   arithmetic) in the same run, and compare the texels.
+1. the timed cube: ``size × size`` texels, 101 bands (380–780 nm, 4 nm, as
+   the paper's cubes), of the 24 ColorChecker patches and the 15 NIST CQS
+   samples mixed smoothly (:func:`~workbench.hyperspectral.synthetic.synthesize_cube`),
+   float32;
+2. K + S as a runtime bundle chooses them for this cube
+   (:func:`workbench.export.level2_files.choose_cube_basis`: the fewest K
+   basis coefficients + S precision channels whose runtime 8-bit texels equal
+   the full band's on ≥ 99.9 % of held-out texels and ≥ 99.5 % of the
+   library's materials, under every source timed), the channels encoded in
+   float16, and the display inverse in the runtime's form (thresholds, cells;
+   :func:`workbench.export.runtime_inverse.runtime_display_inverse`);
+3. for each of D65, A, FL11 and the two-peak source: time a lighting change —
+   the light's record (:func:`~workbench.export.level2_files.level2_light`:
+   the C × 3 matrix and texel tables, the source's band weights cached as a
+   runtime keeps them) then the per-texel kernel
+   (:func:`~workbench.export.level2_files.relight_runtime_texture`, which also
+   counts the texels the light cannot carry) — ``repeats`` times; the same
+   arithmetic in NumPy (the reference consumer's) once; the naive full-band
+   path (``(N, 101) @ (101, 3)`` float32, the display model's inverse, the
+   texel arithmetic) ``full_band_repeats`` times; and compare the texels of
+   the whole cube with the full band's.
 
-Timings are wall-clock medians (``time.perf_counter``) on this machine with
-its current load; the first kernel call (numba compilation or cache load) is
-timed apart and excluded.
+Timings are wall-clock (``time.perf_counter``) on this machine with its
+current load (the load average is reported beside them); the first kernel call
+(numba compilation or cache load) is timed apart and excluded.
 """
 
 from __future__ import annotations
@@ -36,118 +37,84 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from workbench.colorimetry import DEFAULT_K
+from workbench.colorimetry import DEFAULT_K, DEFAULT_OBSERVER
 from workbench.display import DisplayModel, SRGBDisplay
 from workbench.errors import InputError
-from workbench.hyperspectral.basis import (
-    ACCURACY_SOURCES,
-    BASIS_SOURCES,
-    basis_accuracy,
-    encode_cube,
-    fit_spectral_basis,
-)
+from workbench.hyperspectral.basis import ACCURACY_SOURCES
 from workbench.hyperspectral.materials import MATERIAL_SETS, material_reflectances
-from workbench.hyperspectral.relight import (
-    plan_relight,
-    relight_full_band,
-    relight_level2,
-    relight_texels,
-)
+from workbench.hyperspectral.relight import relight_full_band
 from workbench.hyperspectral.resampling import XYZ_band_weights
 from workbench.hyperspectral.synthetic import PAPER_CUBE_WAVELENGTHS, synthesize_cube
 
 __all__ = [
     "FRAME_BUDGET_MS",
-    "BENCHMARK_TARGET_MAX_DE00",
-    "TRAINING_MATERIALS",
-    "VALIDATION_MATERIALS",
-    "TEST_MATERIALS",
+    "GOAL_MS",
+    "TIMED_MATERIALS",
     "RelightBenchmark",
     "benchmark_relight",
-    "held_out_material_sets",
 ]
 
 FRAME_BUDGET_MS = 1000.0 / 90.0
-"""One frame at 90 Hz (11.1 ms): the goal for one relight."""
+"""One frame at 90 Hz (11.1 ms): the budget for one relight."""
 
-BENCHMARK_TARGET_MAX_DE00 = 0.15
-"""Accuracy target K is chosen for on the validation materials.
+GOAL_MS = 5.0
+"""What one relight of 1024² texels aims at on 2 cores (reading the K + S float16 channels
+is the memory-bound floor, 2–3 ms)."""
 
-Stricter than :data:`~workbench.hyperspectral.basis.DEFAULT_TARGET_MAX_DE00`
-(0.25, for K chosen on held-out texels of the cube's own materials): 15
-validation materials bound the worst case on other materials less well.
-Measured with seeds 0–3: 0.25 on the CIE 13.3 samples gave K = 13 and up to
-0.48 on the NIST CQS samples under the two-peak source, at the goal's edge;
-0.15 gives K = 16 and at most 0.08.
-"""
-
-TRAINING_MATERIALS = "ces99"
-"""The materials the basis is fitted on (:data:`~workbench.hyperspectral.materials.MATERIAL_SETS`)."""
-
-VALIDATION_MATERIALS = "cie-tcs"
-"""The materials K is chosen on."""
-
-TEST_MATERIALS = ("colorchecker", "nist-cqs-vs")
-"""The materials the accuracy is reported on, and the timed cube is made of."""
-
-TRAINING_SHAPE = (128, 128)
-VALIDATION_SHAPE = (64, 128)
-TEST_SET_SHAPE = (64, 64)
-MIXING_CELL = 8
-TEST_TEXELS = 8192
+TIMED_MATERIALS = ("colorchecker", "nist-cqs-vs")
+"""The materials the timed cube is made of (:data:`~workbench.hyperspectral.materials.MATERIAL_SETS`)."""
 
 
 @dataclass(frozen=True)
 class RelightBenchmark:
     """Figures of one benchmark run (times in ms unless named ``_s``).
 
-    ``ms_per_relight`` = plan (K × 3 matrix + tables, source weights cached)
-    + fused kernel, median over sources and repeats; ``full_band_ms`` the
-    naive path's median (``full_band_product_ms``: its spectral product
-    alone); ``max_dE00`` the largest CIEDE2000 between basis and full-band
-    ``XYZ_t`` of the test texels over :data:`ACCURACY_SOURCES` — materials
-    neither the fit (``training_materials``) nor the choice of K
-    (``validation_materials``, where the worst was ``validation_max_dE00``)
-    saw; ``per_material_set_max_dE00`` the same per test set, pure and mixed
-    within the set (CIELAB white: the perfect diffuser under each source).
-    ``unreachable_texels``: texels of the timed cube the light cannot carry,
-    per source, as the kernel counts them.
+    ``ms_per_relight`` = the light's record (C × 3 matrix and tables, band
+    weights cached) + the per-texel kernel, median over sources and repeats
+    (``_min``/``_max`` their range); ``numpy_ms`` the same arithmetic in NumPy;
+    ``full_band_ms`` the naive path (``full_band_product_ms``: its spectral
+    product alone). ``identical``/``within_1_count``: per source, the share
+    of the timed cube's texels equal to (within one count of) the full band's;
+    ``held_out_identical``/``probe_identical``: the shares K + S were chosen
+    on (held-out texels through the runtime's inverse; the library's
+    materials). ``load_average``: the 1-minute load average before and after
+    the timed runs.
     """
 
     size: int
     bands: int
     K: int
+    split: int
+    channels: int
+    layers: int
     kernel: str
     threads: int
     cpus: int
     display: str
     ms_per_relight: float
     ms_per_relight_min: float
+    ms_per_relight_max: float
     kernel_ms: float
     plan_ms: float
+    numpy_ms: float
     full_band_ms: float
     full_band_product_ms: float
-    numpy_basis_ms: float
     speedup_vs_full: float
-    max_dE00: float
-    per_source_max_dE00: dict = field(default_factory=dict)
-    per_source_mean_dE00: dict = field(default_factory=dict)
-    per_material_set_max_dE00: dict = field(default_factory=dict)
-    texels_within_1_count: dict = field(default_factory=dict)
+    identical: dict = field(default_factory=dict)
+    within_1_count: dict = field(default_factory=dict)
     unreachable_texels: dict = field(default_factory=dict)
-    target_max_dE00: float = BENCHMARK_TARGET_MAX_DE00
-    validation_max_dE00: float = 0.0
-    training_materials: str = TRAINING_MATERIALS
-    validation_materials: str = VALIDATION_MATERIALS
-    test_materials: str = ", ".join(TEST_MATERIALS)
-    test_texels: int = 0
+    held_out_identical: dict = field(default_factory=dict)
+    probe_identical: dict = field(default_factory=dict)
+    meets_target: bool = True
+    materials: str = ", ".join(TIMED_MATERIALS)
     bytes_per_texel: int = 0
     kernel_GB_per_s: float = 0.0
+    load_average: tuple = (0.0, 0.0)
     compile_s: float = 0.0
     synthesize_s: float = 0.0
-    fit_s: float = 0.0
-    encode_s: float = 0.0
+    choose_s: float = 0.0
     frame_budget_ms: float = FRAME_BUDGET_MS
+    goal_ms: float = GOAL_MS
 
     def to_json(self) -> dict:
         rounded = {}
@@ -155,92 +122,64 @@ class RelightBenchmark:
             if isinstance(value, float):
                 rounded[key] = round(value, 4)
             elif isinstance(value, dict):
-                rounded[key] = {k: round(v, 4) for k, v in value.items()}
+                rounded[key] = {k: round(v, 6) for k, v in value.items()}
+            elif isinstance(value, tuple):
+                rounded[key] = [round(v, 2) for v in value]
             else:
                 rounded[key] = value
         return rounded
 
     def summary(self) -> str:
+        verdict = ("met" if self.ms_per_relight <= self.goal_ms else
+                   "within the frame" if self.ms_per_relight <= self.frame_budget_ms else
+                   "not met")
         lines = [
-            f"relight benchmark: {self.size}×{self.size}×{self.bands} cube, K = {self.K} "
-            f"(float16, {self.bytes_per_texel} B/texel moved), kernel {self.kernel}, "
-            f"{self.threads} threads on {self.cpus} CPUs, display {self.display}",
-            f"  basis relight  {self.ms_per_relight:8.2f} ms (median; min {self.ms_per_relight_min:.2f}; "
-            f"kernel {self.kernel_ms:.2f} + plan {self.plan_ms:.2f}; "
-            f"{self.kernel_GB_per_s:.1f} GB/s)  goal ≤ {self.frame_budget_ms:.1f} ms "
-            f"({'met' if self.ms_per_relight <= self.frame_budget_ms else 'not met'})",
+            f"relight benchmark: {self.size}×{self.size}×{self.bands} cube of "
+            f"{_described(self.materials)}, display {self.display}",
+            f"  runtime method: K = {self.K} + S = {self.split} float16 channels "
+            f"({self.layers} RGBA16F layers, {self.bytes_per_texel} B/texel moved), as a bundle "
+            f"chooses them{'' if self.meets_target else ' (closest tried: target not met)'}",
+            f"  relight        {self.ms_per_relight:8.2f} ms (median; {self.ms_per_relight_min:.2f}"
+            f"–{self.ms_per_relight_max:.2f}; kernel {self.kernel_ms:.2f} + light {self.plan_ms:.2f}; "
+            f"{self.kernel_GB_per_s:.1f} GB/s; kernel {self.kernel}, {self.threads} "
+            f"thread{'s' if self.threads != 1 else ''} on {self.cpus} CPUs, load average "
+            f"{self.load_average[0]:.1f}–{self.load_average[1]:.1f})",
+            f"                 goal ≤ {self.goal_ms:g} ms, frame ≤ {self.frame_budget_ms:.1f} ms: "
+            f"{verdict}",
+            f"  numpy          {self.numpy_ms:8.2f} ms   (the same arithmetic as the reference "
+            "consumer)",
             f"  full band      {self.full_band_ms:8.2f} ms   speed-up × {self.speedup_vs_full:.1f} "
             f"(of which the (N, {self.bands}) @ ({self.bands}, 3) float32 product "
             f"{self.full_band_product_ms:.1f} ms)",
-            f"  numpy basis    {self.numpy_basis_ms:8.2f} ms   (same basis, NumPy + the model's inverse)",
-            f"  basis fitted on {_described(self.training_materials)}; K chosen for max ΔE00 ≤ "
-            f"{self.target_max_dE00:g} on {_described(self.validation_materials)} (reached "
-            f"{self.validation_max_dE00:.3f})",
-            f"  max ΔE00 vs full band on {self.test_texels} texels of materials the basis never "
-            f"saw ({_described(self.test_materials)}): {self.max_dE00:.3f} (goal ≤ 0.5)",
+            "  8-bit texels equal to the full band's, whole cube (K + S chosen on: held-out "
+            "texels / library materials):",
         ]
-        for source, value in self.per_source_max_dE00.items():
-            within = self.texels_within_1_count.get(source)
-            extra = f"   texels within 1 count: {100 * within:.2f} %" if within is not None else ""
-            unreachable = self.unreachable_texels.get(source)
-            extra += f"   unreachable: {unreachable}" if unreachable is not None else ""
-            lines.append(f"    {source:<16} max {value:.3f}  mean "
-                         f"{self.per_source_mean_dE00[source]:.3f}{extra}")
-        for material_set, value in self.per_material_set_max_dE00.items():
-            lines.append(f"    {material_set:<16} max {value:.3f} (pure and mixed within the set)")
-        lines.append("  CIELAB white: the perfect diffuser under each source")
+        for source, share in self.identical.items():
+            lines.append(f"    {source:<16} {100 * share:7.3f} %   within 1 count "
+                         f"{100 * self.within_1_count[source]:7.3f} %   ("
+                         f"{100 * self.held_out_identical.get(source, float('nan')):.2f} / "
+                         f"{100 * self.probe_identical.get(source, float('nan')):.2f} %)   "
+                         f"unreachable {self.unreachable_texels[source]}")
+        lines.append(f"  set-up: cube {self.synthesize_s:.1f} s, K + S chosen and encoded "
+                     f"{self.choose_s:.1f} s, kernel compiled or loaded {self.compile_s:.1f} s")
         return "\n".join(lines)
 
 
 def _described(material_sets: str) -> str:
-    """``"a, b"`` material set ids → their descriptions, ids in brackets."""
+    """``"a, b"`` material set ids → their descriptions."""
     names = [name.strip() for name in material_sets.split(",")]
-    return " and ".join(f"{MATERIAL_SETS[name].description} ({name})" if name in MATERIAL_SETS
-                        else name for name in names)
+    return " and ".join(MATERIAL_SETS[name].description if name in MATERIAL_SETS else name
+                        for name in names)
 
 
 def _median_ms(times: list[float]) -> float:
     return float(np.median(times) * 1e3)
 
 
-def _materials_cube(name: str, shape: tuple[int, int], seed: int, wavelengths):
-    """A cube of one material set mixed smoothly (the pure spectra sit at its cell corners)."""
-    return synthesize_cube(*shape, wavelengths=wavelengths, cell=MIXING_CELL, seed=seed,
-                           reflectances=material_reflectances(name, wavelengths),
-                           materials=MATERIAL_SETS[name].description)
-
-
-def held_out_material_sets(wavelengths=PAPER_CUBE_WAVELENGTHS, *, seed: int = 0
-                           ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """Training, validation and per-set test reflectances, disjoint by material (module doc).
-
-    Returns
-    -------
-    training : ndarray (N, B)
-        Texels of a :data:`TRAINING_SHAPE` cube of :data:`TRAINING_MATERIALS`.
-    validation : ndarray (M, B)
-        :data:`VALIDATION_MATERIALS` pure, then the texels of a
-        :data:`VALIDATION_SHAPE` cube of their mixtures.
-    test : dict of str → ndarray (L, B)
-        Per set of :data:`TEST_MATERIALS`: the set pure, then the texels of a
-        :data:`TEST_SET_SHAPE` cube of its mixtures.
-    """
-    training = _materials_cube(TRAINING_MATERIALS, TRAINING_SHAPE, seed, wavelengths).texels()
-    validation = np.vstack([
-        material_reflectances(VALIDATION_MATERIALS, wavelengths),
-        _materials_cube(VALIDATION_MATERIALS, VALIDATION_SHAPE, seed + 1, wavelengths).texels()])
-    test = {name: np.vstack([
-        material_reflectances(name, wavelengths),
-        _materials_cube(name, TEST_SET_SHAPE, seed + 3 + index, wavelengths).texels()])
-        for index, name in enumerate(TEST_MATERIALS)}
-    return training, validation, test
-
-
 def benchmark_relight(size: int = 1024, *, repeats: int = 20, full_band_repeats: int = 3,
                       display: DisplayModel | None = None, kernel: str = "auto",
-                      target_max_dE00: float = BENCHMARK_TARGET_MAX_DE00,
-                      sources=ACCURACY_SOURCES, k: float = DEFAULT_K, seed: int = 0
-                      ) -> RelightBenchmark:
+                      threads: int | None = None, sources=ACCURACY_SOURCES, k: float = DEFAULT_K,
+                      observer: str = DEFAULT_OBSERVER, seed: int = 0) -> RelightBenchmark:
     """Run the relight benchmark (module doc).
 
     Parameters
@@ -254,76 +193,81 @@ def benchmark_relight(size: int = 1024, *, repeats: int = 20, full_band_repeats:
     display : DisplayModel, optional
         Default: ideal sRGB.
     kernel : str
-        A relight kernel name or ``"auto"``.
-    target_max_dE00 : float
-        Accuracy target for choosing K on the validation materials.
+        ``"auto"``, ``"numba"`` or ``"numpy"``
+        (:func:`~workbench.export.level2_files.runtime_level2_texels`).
+    threads : int, optional
+        Threads of the compiled kernel (default: every CPU).
     sources : sequence of str
-        Sources timed and scored.
+        Sources K + S are chosen under, timed and scored.
     """
     if size < 16:
         raise InputError(f"--size {size}: the benchmark needs a cube of at least 16 × 16 texels")
     if repeats < 1 or full_band_repeats < 1:
         raise InputError("repeats must be at least 1")
+    if threads is not None and threads < 1:
+        raise InputError(f"--threads {threads}: at least 1")
+    import numba
+
+    from workbench.export.level2_files import (
+        level2_light,
+        relight_runtime_texture,
+        resolve_runtime_kernel,
+        runtime_level2_texels,
+        runtime_texture,
+    )
+    from workbench.export.runtime_inverse import runtime_display_inverse
     from workbench.illuminants import get_illuminant
 
     display = display or SRGBDisplay()
     wavelengths = PAPER_CUBE_WAVELENGTHS
     started = time.perf_counter()
-    train, validation, test_sets = held_out_material_sets(wavelengths, seed=seed)
-    test_spectra = np.vstack([material_reflectances(name, wavelengths) for name in TEST_MATERIALS])
+    spectra = np.vstack([material_reflectances(name, wavelengths) for name in TIMED_MATERIALS])
     cube = synthesize_cube(size, size, wavelengths=wavelengths, cell=max(4, size // 16),
-                           seed=seed + 2, reflectances=test_spectra,
+                           seed=seed + 2, reflectances=spectra,
                            materials=" + ".join(MATERIAL_SETS[name].description
-                                                for name in TEST_MATERIALS))
+                                                for name in TIMED_MATERIALS))
     synthesize_s = time.perf_counter() - started
 
-    texels = cube.texels()
-    count = len(texels)
-    sample = np.random.default_rng(seed + 1).permutation(count)[:min(TEST_TEXELS, count)]
-    test = np.vstack([*test_sets.values(), texels[sample]])
-
-    started = time.perf_counter()
-    basis = fit_spectral_basis(train, wavelengths, held_out=validation,
-                               target_max_dE00=target_max_dE00, k=k,
-                               sources=tuple(dict.fromkeys(BASIS_SOURCES + tuple(sources))))
-    fit_s = time.perf_counter() - started
-    accuracy = basis_accuracy(basis, test, sources, k=k)
-    per_set = {name: basis_accuracy(basis, values, sources, k=k).worst_dE00
-               for name, values in test_sets.items()}
-
-    started = time.perf_counter()
-    texture = encode_cube(cube, basis)
-    encode_s = time.perf_counter() - started
-
     illuminants = {source: get_illuminant(source) for source in sources}
+    inverse = runtime_display_inverse(display)
+    started = time.perf_counter()
+    texture = runtime_texture(cube, display, list(illuminants.values()), inverse, k=k,
+                              observer=observer, seed=seed)
+    choose_s = time.perf_counter() - started
+    planes = texture.planes
+    choice = texture.choice
+
     Y_white = float(display.white_XYZ[1])
-    weights = {source: XYZ_band_weights(illuminants[source].sd, cube.wavelengths, basis.observer,
+    weights = {source: XYZ_band_weights(illuminants[source].sd, cube.wavelengths, observer,
                                         k=k, Y_white=Y_white) for source in sources}
     out = np.empty((size, size, 3), dtype=np.uint8)
     first = next(iter(sources))
     started = time.perf_counter()
-    plan = plan_relight(basis, illuminants[first], display, k=k, weights=weights[first])
-    relight_texels(texture, plan, kernel=kernel, out=out)       # compile / load the cached kernel
+    relight_runtime_texture(texture, illuminants[first], display, inverse, k=k, kernel=kernel,
+                            out=out, weights=weights[first], threads=threads)
     compile_s = time.perf_counter() - started
-    kernel_name = kernel if kernel != "auto" else ("numba" if plan.inverse_lut is not None
-                                                   else "numpy")
+    kernel_name = resolve_runtime_kernel(inverse, kernel)
 
     relight_times, plan_times, kernel_times, full_times, numpy_times = [], [], [], [], []
     product_times = []
-    within, unreachable = {}, {}
+    identical, within, unreachable = {}, {}, {}
+    texels = cube.texels()
+    load_before = os.getloadavg()[0]
     for source in sources:
         for _ in range(repeats):
             t0 = time.perf_counter()
-            plan = plan_relight(basis, illuminants[source], display, k=k, weights=weights[source])
+            light = level2_light(texture.basis, illuminants[source], display, inverse, k=k,
+                                 split=texture.split, weights=weights[source])
             t1 = time.perf_counter()
-            relit = relight_level2(texture, plan, kernel=kernel, out=out)
+            _, missed = runtime_level2_texels(planes, light, inverse, kernel=kernel,
+                                              out=out.reshape(-1, 3), threads=threads)
             t2 = time.perf_counter()
             relight_times.append(t2 - t0)
             plan_times.append(t1 - t0)
             kernel_times.append(t2 - t1)
-        unreachable[source] = relit.unreachable
+        unreachable[source] = missed
         t0 = time.perf_counter()
-        relight_texels(texture, plan, kernel="numpy")
+        runtime_level2_texels(planes, light, inverse, kernel="numpy")
         numpy_times.append(time.perf_counter() - t0)
         weights32 = weights[source].astype(np.float32)
         for _ in range(full_band_repeats):
@@ -332,32 +276,34 @@ def benchmark_relight(size: int = 1024, *, repeats: int = 20, full_band_repeats:
             product_times.append(time.perf_counter() - t0)
             t0 = time.perf_counter()
             reference = relight_full_band(cube, illuminants[source], display, k=k,
-                                          observer=basis.observer, weights=weights[source])
+                                          observer=observer, weights=weights[source])
             full_times.append(time.perf_counter() - t0)
         difference = np.abs(out.astype(np.int16) - reference.astype(np.int16)).max(axis=-1)
+        identical[source] = float(np.mean(difference == 0))
         within[source] = float(np.mean(difference <= 1))
-
-    import numba
+    load_after = os.getloadavg()[0]
 
     ms_per_relight = _median_ms(relight_times)
     kernel_ms = _median_ms(kernel_times)
     full_band_ms = _median_ms(full_times)
-    bytes_per_texel = 2 * basis.components + 3
+    channels = texture.components + texture.split
+    bytes_per_texel = 2 * channels + 3
     return RelightBenchmark(
-        size=size, bands=cube.bands, K=basis.components, kernel=kernel_name,
-        threads=int(numba.get_num_threads()) if kernel_name == "numba" else 1,
+        size=size, bands=cube.bands, K=texture.components, split=texture.split,
+        channels=channels, layers=-(-channels // 4), kernel=kernel_name,
+        threads=(int(threads or numba.get_num_threads()) if kernel_name == "numba" else 1),
         cpus=_cpus(), display=display.describe(),
         ms_per_relight=ms_per_relight, ms_per_relight_min=float(np.min(relight_times) * 1e3),
-        kernel_ms=kernel_ms, plan_ms=_median_ms(plan_times), full_band_ms=full_band_ms,
-        full_band_product_ms=_median_ms(product_times),
-        numpy_basis_ms=_median_ms(numpy_times), speedup_vs_full=full_band_ms / ms_per_relight,
-        max_dE00=accuracy.worst_dE00, per_source_max_dE00=dict(accuracy.max_dE00),
-        per_source_mean_dE00=dict(accuracy.mean_dE00), per_material_set_max_dE00=per_set,
-        texels_within_1_count=within, unreachable_texels=unreachable,
-        target_max_dE00=target_max_dE00, validation_max_dE00=basis.held_out.worst_dE00,
-        test_texels=accuracy.samples, bytes_per_texel=bytes_per_texel,
-        kernel_GB_per_s=bytes_per_texel * count / (kernel_ms * 1e-3) / 1e9,
-        compile_s=compile_s, synthesize_s=synthesize_s, fit_s=fit_s, encode_s=encode_s)
+        ms_per_relight_max=float(np.max(relight_times) * 1e3),
+        kernel_ms=kernel_ms, plan_ms=_median_ms(plan_times), numpy_ms=_median_ms(numpy_times),
+        full_band_ms=full_band_ms, full_band_product_ms=_median_ms(product_times),
+        speedup_vs_full=full_band_ms / ms_per_relight,
+        identical=identical, within_1_count=within, unreachable_texels=unreachable,
+        held_out_identical=dict(choice.basis_identical), probe_identical=dict(choice.probe_identical),
+        meets_target=choice.meets_target, bytes_per_texel=bytes_per_texel,
+        kernel_GB_per_s=bytes_per_texel * size * size / (kernel_ms * 1e-3) / 1e9,
+        load_average=(load_before, load_after), compile_s=compile_s,
+        synthesize_s=synthesize_s, choose_s=choose_s)
 
 
 def _cpus() -> int:
