@@ -22,7 +22,17 @@ frames and scored by leaving one window size or surround level out
 
 Findings are ordered with ``temporal-drift`` first (the other detectors read
 its correction, so it is the cause they are conditioned on), then by impact
-on the fixed colours, then ``unexplained-residual``.
+on the fixed colours, each consequence right after its cause (a power limit's
+bend on the sweeps, :mod:`workbench.diagnostics.power_limit`: the finding
+carries ``consequence_of``), then ``unexplained-residual``.
+
+The exported model is then chosen by the same cross-validation among the
+term selection's model and the alternatives the rows allow
+(:mod:`workbench.diagnostics.model_choice`: the power-limit model where a
+power limit was identified, the seed authors' grey-ramp linearisation and its
+sweep-corrected form where the fit rows hold a grey ramp); each finding then
+says whether the exported model answers it, and ``model_choice`` why that
+model was taken.
 """
 
 from __future__ import annotations
