@@ -202,10 +202,11 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                   f"(cross-validated mean ΔE00: {listed}" + (f"; {'; '.join(notes)}" if notes
                                                              else "") + ")")
     elif scores[chosen] > scores.get(current, float("inf")):
+        others = [note for note in notes if not note.startswith(f"{chosen},")]
         reason = (f"{chosen}, the model of the identified cause, predicts unseen fit rows no "
                   f"worse beyond noise than the {current} ({scores[chosen]:.3f} against "
-                  f"{scores[current]:.3f} cross-validated mean ΔE00, within noise; "
-                  f"{'; '.join(notes)})")
+                  f"{scores[current]:.3f} cross-validated mean ΔE00, within noise"
+                  + (f"; {'; '.join(others)})" if others else ")"))
     else:
         reason = (f"{chosen} predicts unseen fit rows better than the {current} "
                   f"({scores[chosen]:.3f} against {scores[current]:.3f} cross-validated mean "
