@@ -5,6 +5,7 @@ criterion; here two sessions of one form go through it, and the generator's foll
 (:meth:`GeneratedSession.measure_more`) is checked to measure on the same display.
 """
 
+import json
 import math
 from dataclasses import asdict
 
@@ -108,3 +109,15 @@ def test_measure_more_continues_a_drift_in_time():
     assert np.array_equal(generated.measure_more(whites, seed=2).session.XYZ, combined.session.XYZ)
     assert not np.array_equal(generated.measure_more(whites, seed=3).session.XYZ[n:],
                               combined.session.XYZ[n:])
+
+
+def test_the_benches_run_from_the_workbench_command_line(capsys):
+    """``bench peers`` and ``bench follow-up`` print the tables the README quotes; a bad --seeds
+    is refused with the fix."""
+    from workbench.cli import main
+
+    assert main(["bench", "follow-up", "--seeds", "1", "--json"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert {row["form"] for row in document["rows"]} >= {"knee", "drive-crosstalk"}
+    assert main(["bench", "peers", "--seeds", "0"]) == 2
+    assert "give at least 1 session" in capsys.readouterr().err

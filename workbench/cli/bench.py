@@ -129,21 +129,68 @@ def _suite_arguments(parser: argparse.ArgumentParser) -> None:
                              "test's 10, 940 sessions)")
 
 
-def _suite_run(args: argparse.Namespace):
+def _from_tests(module: str):
+    """A module of the checkout's tests/diagnostics (the independent generator lives there)."""
+    import importlib
+
     try:
-        from tests.diagnostics.suite import SUITE_SEEDS, pooled_cases, run_suite
+        return importlib.import_module(f"tests.diagnostics.{module}")
     except ImportError as error:
         from workbench.errors import WorkbenchError
 
         raise WorkbenchError("the acceptance suite's independent generator lives in the "
                              f"checkout's tests/diagnostics ({error}); run this from the "
                              "checkout's root") from None
+
+
+def _suite_run(args: argparse.Namespace):
+    suite = _from_tests("suite")
+    SUITE_SEEDS, pooled_cases, run_suite = suite.SUITE_SEEDS, suite.pooled_cases, suite.run_suite
     suites = SUITE_SEEDS if args.suites is None else args.suites
     if suites < 1:
         from workbench.errors import InputError
 
         raise InputError(f"--suites {suites}: give at least 1 suite to run")
     return run_suite(cases=pooled_cases(suites, args.seed))
+
+
+def _seeds_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--seeds", type=int, default=3, metavar="N",
+                        help="sessions per plan and scenario (default 3; the README's figures: 10)")
+
+
+@dataclass(frozen=True)
+class _BenchTable:
+    """A bench of the independent generator: its summary rows and its printed table."""
+
+    rows: list
+    text: str
+
+    def to_json(self) -> dict:
+        return {"rows": self.rows}
+
+    def summary(self) -> str:
+        return self.text
+
+
+def _checked_seeds(args) -> int:
+    if args.seeds < 1:
+        from workbench.errors import InputError
+
+        raise InputError(f"--seeds {args.seeds}: give at least 1 session per scenario")
+    return args.seeds
+
+
+def _peers_run(args: argparse.Namespace):
+    bench = _from_tests("peer_bench")
+    outcomes = bench.run_peer_bench(seeds=_checked_seeds(args))
+    return _BenchTable(bench.summarize(outcomes), bench.table(outcomes))
+
+
+def _follow_up_run(args: argparse.Namespace):
+    bench = _from_tests("follow_up_bench")
+    outcomes = bench.run_follow_up_bench(seeds=_checked_seeds(args))
+    return _BenchTable(bench.summarize(outcomes), bench.table(outcomes))
 
 
 BENCHMARKS: dict[str, Benchmark] = {
@@ -156,6 +203,13 @@ BENCHMARKS: dict[str, Benchmark] = {
                            "shaper + matrix", _real_data_arguments, _real_data_run),
     "diagnose-suite": Benchmark("the seeded acceptance suite of the independent generator: "
                                 "false-finding and detection rates", _suite_arguments, _suite_run),
+    "peers": Benchmark("the exported profile beside the seed authors' grey-ramp method on the "
+                       "independent generator's forms, on paper, paper+greys and authors-2024: "
+                       "hidden-colour ΔE00, causes named, false findings",
+                       _seeds_arguments, _peers_run),
+    "follow-up": Benchmark("the proposed follow-up measured on the same generated display: its "
+                           "share of the instrument time and the held-out gain before and after",
+                           _seeds_arguments, _follow_up_run),
     "gui": Benchmark("the window: event-loop stalls while calibrating, source switch, first paint",
                      _gui_arguments, _gui_run),
 }
