@@ -22,8 +22,11 @@ The grey-ramp candidates exist where the fit rows hold at least
 :data:`~workbench.diagnostics.authors.MIN_GREYS` grey levels. Where
 ``temporal-drift`` is in the model they are fitted on the drift-corrected
 rows and their predictions carry the drift gain, as the extension's do.
-A grey-ramp candidate is exported where it beats the model term selection
-chose beyond noise (:func:`choose_model`); otherwise that model is.
+An alternative replaces the model term selection chose by the rules of
+:func:`choose_model`: the authors' method where it predicts the fit rows
+better, the sweep correction where it does so beyond noise (or where an
+interaction was found), the power limit unless it predicts them worse beyond
+noise.
 """
 
 from __future__ import annotations
@@ -118,7 +121,7 @@ class ModelChoice:
 
 def choose_model(context: DiagnosisContext, current: str, current_errors, baseline_errors,
                  drift: bool, power_limit: bool = False, found=()) -> ModelChoice:
-    """The exported model: term selection's, or a grey-ramp candidate that beats it beyond noise.
+    """The exported model: term selection's, or an alternative that replaces it (Notes).
 
     Parameters
     ----------
@@ -134,8 +137,8 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     power_limit : bool
         Whether the diagnosis identified a power limit that bends the sweeps
         (:func:`~workbench.diagnostics.power_limit.tone_bend_explained`): the
-        ``power-limit`` candidate is then tried first, and taken where it
-        predicts unseen fit rows better.
+        ``power-limit`` candidate is then tried first, and taken unless it
+        predicts unseen fit rows worse beyond noise.
     found : sequence of str
         The found effects (a candidate keeps the black only where
         ``black-offset`` is among them).
@@ -166,32 +169,31 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     notes = []
     names = (("power-limit",) if power_limit else ()) + (
         GREY_RAMP_CANDIDATES if has_grey_ramp(context) else ())
-    if names:
-        for name in names:
-            errors = cross_validated_errors_of(
-                context, lambda fold_context, _baseline, name=name: fit_candidate(
-                    name, fold_context, found),
-                drift=drift)
-            scores[name] = score(errors)
-            gain, standard_error = paired_gain(chosen_errors, errors)
-            # the sweep correction must beat noise on a display not found non-additive, and any
-            # flexible candidate must to replace the model of an identified cause
-            noise_tested = ((name in NOISE_TESTED_CANDIDATES and "channel-interaction" not in found)
-                            or (chosen in IDENTIFIED_CANDIDATES and name != chosen))
-            needed = (CV_Z * standard_error if noise_tested else
-                      -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES else 0.0)
-            if gain > needed and np.isfinite(scores[name]):
-                notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
-                             if gain > 0 else
-                             f"{name}, the identified cause, predicts no worse beyond noise than "
-                             f"the {chosen} ({gain:.3f} ± {standard_error:.3f})")
-                chosen, chosen_errors = name, errors
-            elif np.isfinite(scores[name]):
-                notes.append(f"{name} does not beat the {chosen}"
-                             + (f" beyond noise ({gain:.3f} ± {standard_error:.3f}, {CV_Z:g} "
-                                "standard errors needed)" if needed > 0 else
-                                f" and predicts worse beyond noise ({gain:.3f} ± "
-                                f"{standard_error:.3f})" if needed < 0 else f" ({gain:.3f})"))
+    for name in names:
+        errors = cross_validated_errors_of(
+            context, lambda fold_context, _baseline, name=name: fit_candidate(
+                name, fold_context, found),
+            drift=drift)
+        scores[name] = score(errors)
+        gain, standard_error = paired_gain(chosen_errors, errors)
+        # the sweep correction must beat noise on a display not found non-additive, and any
+        # flexible candidate must to replace the model of an identified cause
+        noise_tested = ((name in NOISE_TESTED_CANDIDATES and "channel-interaction" not in found)
+                        or (chosen in IDENTIFIED_CANDIDATES and name != chosen))
+        needed = (CV_Z * standard_error if noise_tested else
+                  -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES else 0.0)
+        if gain > needed and np.isfinite(scores[name]):
+            notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
+                         if gain > 0 else
+                         f"{name}, the identified cause, predicts no worse beyond noise than "
+                         f"the {chosen} ({gain:.3f} ± {standard_error:.3f})")
+            chosen, chosen_errors = name, errors
+        elif np.isfinite(scores[name]):
+            notes.append(f"{name} does not beat the {chosen}"
+                         + (f" beyond noise ({gain:.3f} ± {standard_error:.3f}, {CV_Z:g} "
+                            "standard errors needed)" if needed > 0 else
+                            f" and predicts worse beyond noise ({gain:.3f} ± "
+                            f"{standard_error:.3f})" if needed < 0 else f" ({gain:.3f})"))
     listed = ", ".join(f"{k} {v:.3f}" if np.isfinite(v) else f"{k} could not be fitted in a fold"
                        for k, v in scores.items())
     if not np.isfinite(scores.get(chosen, float("inf"))) and chosen == current:
