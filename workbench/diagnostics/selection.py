@@ -48,7 +48,6 @@ from workbench.diagnostics.detectors import (
     DetectorResult,
     DiagnosisContext,
     build_context,
-    common_gain_test,
     run_detectors,
     family_size,
 )
@@ -474,8 +473,8 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, boo
     """
     if not {"channel-interaction", "tone-curve-shape"} <= set(found):
         return results, False
-    common = common_gain_test(context)
-    if common is not None and common.channel_specific:
+    interaction = next(r for r in results if r.effect == "channel-interaction")
+    if interaction.details.get("channel_specific"):  # the detector's common-gain test
         return results, False
     explained, why, _ = tone_bend_explained(context)
     if not explained:
