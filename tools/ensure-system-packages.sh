@@ -9,7 +9,7 @@ set -u
 PYTHON=${PYTHON:-python3}
 packages="xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-cursor0 libxkbcommon-x11-0 \
 libgl1 libegl1 libgl1-mesa-dri libegl-mesa0 libfontconfig1 libdbus-1-3 \
-argyll glslang-tools spirv-tools spirv-cross mono-mcs"
+argyll glslang-tools spirv-tools spirv-cross mono-mcs mono-runtime chromium"
 if ! "$PYTHON" -c 'import venv, ensurepip' >/dev/null 2>&1; then
     version=$("$PYTHON" -c 'import sys; print(f"{sys.version_info[0]}.{sys.version_info[1]}")' 2>/dev/null)
     packages="python${version}-venv python3-venv $packages"
