@@ -41,6 +41,22 @@ Requests and replies
         integers 0..255, the DAC values of the rest of the field, default
         ``[0, 0, 0]``. The client sends them only for a patch that is not full
         field.
+    ``{"cmd": "show", "id": 4, "rgb": [255, 0, 0], "eye": "left"}``
+        → ``{"ok": true, "id": 4}``: a patch in **one eye**. Optional field
+        ``eye``: ``"left"``, ``"right"`` or ``"both"`` (default both); the
+        named eye's panel shows the patch (with ``window``/``surround`` as
+        usual), the other eye's panel is black. The client sends it only when
+        it is not ``"both"`` (``measure --eye left|right``); a server written
+        before it refuses the unknown field, and the client reports that the
+        display cannot show a patch to one eye (:class:`EyeUnsupported`).
+    ``{"cmd": "target", "id": 5}`` (optional ``eye`` as above)
+        → ``{"ok": true, "id": 5}`` once a frame showing the **centring
+        target** has been presented: a black field with concentric white
+        rings at 10, 20, 30 and 40 % of the field's smaller side in radius
+        (2-pixel lines) and a cross through the centre, to aim the instrument
+        through the lens (``measure --target``). It stays until the next
+        ``show``. A server without it answers the unknown-``cmd`` error
+        (:class:`TargetUnsupported`).
     ``{"cmd": "bye", "id": 3}``
         → ``{"ok": true, "id": 3}``; then the server closes the connection (and
         may go back to its own picture).
@@ -49,7 +65,10 @@ Errors
     ``cmd``, a malformed ``rgb``, ``window`` or ``surround``, a field the
     server does not know (the error names it: ``unknown field 'window'``),
     or a patch that could not be shown; a line that is not JSON gets
-    ``"id": null``. The connection stays open. A server that cannot show APL
+    ``"id": null``. The connection stays open. One client at a time: while a
+    client is connected, a second connection gets one line
+    ``{"ok": false, "id": null, "error": "busy: ..."}`` naming the first
+    client, and is closed. A server that cannot show APL
     patches answers such a ``show`` with ``ok: false`` naming the field, and
     the client reports that the display cannot show APL patches
     (:class:`AplPatchesUnsupported`).
@@ -98,6 +117,11 @@ __all__ = [
     "is_apl_patch",
     "show_patch",
     "LineReader",
+    "EYES",
+    "validate_eye",
+    "EyeUnsupported",
+    "TargetUnsupported",
+    "show_target",
 ]
 
 _LOG = logging.getLogger(__name__)
@@ -117,8 +141,27 @@ class AplPatchesUnsupported(PatchDisplayError):
     """The display cannot show a patch as a window on a surround (an APL patch)."""
 
 
+class EyeUnsupported(PatchDisplayError):
+    """The display cannot show a patch to one eye only (its patch server predates ``eye``)."""
+
+
+class TargetUnsupported(PatchDisplayError):
+    """The display cannot show the centring target (its patch server predates ``target``)."""
+
+
 SHOW_FIELDS = ("cmd", "id", "rgb", "window", "surround")
-"""Fields a ``show`` request may carry; a server answers any other with ``ok: false`` naming it."""
+"""Fields a ``show`` request may carry (and ``eye``, of the protocol's per-eye addition); a server
+answers any other with ``ok: false`` naming it."""
+
+EYES = ("both", "left", "right")
+"""Which panel of the headset shows the patch (``eye`` of ``show`` and ``target``); the other one is black."""
+
+
+def validate_eye(eye) -> str:
+    """Return ``eye`` if it is one of :data:`EYES`, or raise ``ValueError`` naming it and the choices."""
+    if not isinstance(eye, str) or eye not in EYES:
+        raise ValueError(f"eye {eye!r} must be one of {', '.join(EYES)}")
+    return eye
 
 
 class _ConnectionDropped(PatchDisplayError):
@@ -204,6 +247,25 @@ def show_patch(display, rgb_dac, window: float = 1.0, surround=(0, 0, 0)) -> Non
             "no 'window' or 'surround'; show the patches in the full-screen window or a VR application "
             "whose patch server accepts them, or measure a plan without APL patches (e.g. --plan paper)"
         ) from error
+
+
+def show_target(display, eye: str = "both") -> None:
+    """Show the centring target on ``display`` (``display.target(eye)``); return once it is shown.
+
+    Raises
+    ------
+    TargetUnsupported
+        If the display has no centring target (no ``target`` method, or its
+        server refused the command).
+    """
+    eye = validate_eye(eye)
+    target = getattr(display, "target", None)
+    if target is None:
+        describe = getattr(display, "describe", lambda: type(display).__name__)
+        raise TargetUnsupported(f"{describe()} has no centring target; aim the instrument at the centre of "
+                                "a white patch instead, or show the patches where a target can be drawn "
+                                "(--display window or tcp:HOST:PORT)")
+    target(eye)
 
 
 def encode_message(message: dict) -> bytes:
@@ -303,6 +365,14 @@ class MirroredPatchDisplay:
         for display in self.displays:
             show_patch(display, rgb_dac, window, surround)
 
+    def target(self, eye: str = "both") -> None:
+        """Show the centring target on each display that has one (at least one must)."""
+        shown = [display for display in self.displays if getattr(display, "target", None) is not None]
+        if not shown:
+            show_target(self.displays[0], eye)  # raises, naming the display
+        for display in shown:
+            display.target(eye)
+
     def close(self) -> None:
         """Close every display."""
         for display in self.displays:
@@ -326,6 +396,10 @@ class TcpPatchDisplay:
         Longest wait to connect and for each reply, in seconds.
     client : str
         How the client introduces itself in ``hello``.
+    eye : str
+        Which panel shows the patches (:data:`EYES`): ``"both"`` (the default;
+        ``eye`` is then not sent, so the wire is as before the per-eye
+        addition), ``"left"`` or ``"right"`` (sent in every ``show`` and ``target``).
 
     Raises
     ------
@@ -339,11 +413,13 @@ class TcpPatchDisplay:
     ...     display.show([255, 255, 255])
     """
 
-    def __init__(self, host: str, port: int, timeout_s: float = 5.0, *, client: str = "instruments"):
+    def __init__(self, host: str, port: int, timeout_s: float = 5.0, *, client: str = "instruments",
+                 eye: str = "both"):
         if not (timeout_s > 0):
             raise ValueError(f"timeout_s {timeout_s!r} must be a positive number of seconds")
         self.host, self.port, self.timeout_s = host, int(port), float(timeout_s)
         self.client = client
+        self.eye = validate_eye(eye)
         self._next_id = 1
         self._sock: socket.socket | None = None
         self._closed = False
@@ -436,16 +512,20 @@ class TcpPatchDisplay:
         the instrument measured or the run was paused), connect again, say
         ``hello`` again and repeat the ``show``, once.
 
+        With :attr:`eye` left or right, the request carries ``eye``.
+
         Raises
         ------
         AplPatchesUnsupported
             When the server refuses an APL patch naming ``window`` or ``surround``.
+        EyeUnsupported
+            When the server refuses the ``eye`` field (it predates the per-eye addition).
         """
         request = {"cmd": "show", "rgb": validate_patch_rgb(rgb_dac)}
         if is_apl_patch(window, surround):
             request.update(window=validate_patch_window(window), surround=validate_patch_rgb(surround))
             try:
-                self._show(request)
+                self._show(self._with_eye(request))
             except _Refused as error:
                 if not any(field in error.server_error for field in ("window", "surround")):
                     raise
@@ -456,9 +536,47 @@ class TcpPatchDisplay:
                     "plan without APL patches (e.g. --plan paper)"
                 ) from error
             return
-        self._show(request)
+        self._show(self._with_eye(request))
+
+    def target(self, eye: str | None = None) -> None:
+        """Show the centring target (the ``target`` command) in :attr:`eye` (or ``eye``); return once presented.
+
+        Raises
+        ------
+        TargetUnsupported
+            When the server does not know the ``target`` command.
+        EyeUnsupported
+            When the server refuses the ``eye`` field.
+        """
+        eye = self.eye if eye is None else validate_eye(eye)
+        request = {"cmd": "target", **({"eye": eye} if eye != "both" else {})}
+        try:
+            self._show(request)
+        except _Refused as error:
+            if "unknown cmd" not in error.server_error and "'target'" not in error.server_error:
+                raise
+            raise TargetUnsupported(
+                f"the display at {self.where} cannot show the centring target ({error.server_error}); "
+                f"update the VR application's patch server to the 'target' command of {PATCH_PROTOCOL}, "
+                "or aim the instrument without --target (at the centre of a white patch)"
+            ) from error
+
+    def _with_eye(self, request: dict) -> dict:
+        """``request`` with ``eye`` when :attr:`eye` is not both (a server that does not know it: :meth:`_show`)."""
+        return {**request, "eye": self.eye} if self.eye != "both" else request
 
     def _show(self, request: dict) -> None:
+        try:
+            self._request_again_if_dropped(request)
+        except _Refused as error:
+            if "eye" in request and "'eye'" in error.server_error:
+                raise EyeUnsupported(
+                    f"the display at {self.where} cannot show a patch to one eye ({error.server_error}); "
+                    "update the VR application's patch server, or measure with --eye both"
+                ) from error
+            raise
+
+    def _request_again_if_dropped(self, request: dict) -> None:
         if self._closed:
             raise PatchDisplayError(f"the patch display {self.where} has been closed")
         if self._sock is None:  # an earlier reconnection failed: try again

@@ -67,6 +67,7 @@ __all__ = [
     "profile_from_diagnosis",
     "apl_block",
     "apl_test_record",
+    "measurement_record",
 ]
 
 PROFILE_FORMAT = "vr-colour-workbench-profile"
@@ -259,6 +260,7 @@ class Profile:
     runtime: dict | None = field(default_factory=lambda: {"colour_space": RUNTIME_COLOUR_SPACE})
     apl: dict | None = None
     apl_test: dict | None = None
+    measurement: dict | None = None
     created: str = ""
     software: str = f"vr-colour-workbench {__version__}"
 
@@ -337,6 +339,8 @@ class Profile:
             document["apl"] = self.apl
         if self.apl_test is not None:
             document["apl_test"] = self.apl_test
+        if self.measurement is not None:
+            document["measurement"] = dict(self.measurement)
         return document
 
     @classmethod
@@ -358,6 +362,7 @@ class Profile:
             lights=tuple(document["lights"]), level2=document.get("level2"),
             lut3d=document.get("lut3d"), runtime=document.get("runtime"),
             apl=document.get("apl"), apl_test=document.get("apl_test"),
+            measurement=document.get("measurement"),
             created=document.get("created", ""),
             software=document["software"])
 
@@ -486,7 +491,19 @@ def profile_from_diagnosis(diagnosis) -> Profile:
                                 for f in diagnosis.findings]},
         apl=apl_block(diagnosis),
         apl_test=apl_test_record(diagnosis),
+        measurement=measurement_record(diagnosis.session),
     ).with_lights(PAPER_SOURCES)
+
+
+def measurement_record(session) -> dict | None:
+    """The profile's ``measurement`` block: which panel (``eye``) and with which instrument sync
+    (``sync``) the session was measured, where its metadata says (a session measured by ``measure``
+    since they are recorded); None where it says neither."""
+    from workbench.session import MEASUREMENT_METADATA
+
+    metadata = getattr(session, "metadata", None) or {}
+    record = {key: str(metadata[key]) for key in MEASUREMENT_METADATA if metadata.get(key)}
+    return record or None
 
 
 def apl_block(diagnosis) -> dict | None:

@@ -32,6 +32,7 @@ from workbench.fileio import atomic_writer
 __all__ = [
     "SESSION_KINDS",
     "NEGATIVE_TOLERANCE",
+    "MEASUREMENT_METADATA",
     "check_measured_XYZ",
     "Session",
     "read_session_csv",
@@ -41,6 +42,11 @@ __all__ = [
 SESSION_KINDS = ("black", "white", "ramp-r", "ramp-g", "ramp-b", "validation", "grey", "mixture")
 
 _REQUIRED = ("kind", "r", "g", "b", "x", "y", "z")
+
+MEASUREMENT_METADATA = ("eye", "sync")
+"""How a measured session was measured, written as constant columns of the session CSV (when known)
+and read back into ``Session.metadata``: ``eye`` (which panel showed the patches: both, left, right)
+and ``sync`` (the instrument's sync mode: none, internal:HZ, external)."""
 _SPECTRAL = re.compile(r"^nm(\d{3})$")
 
 
@@ -246,8 +252,8 @@ def read_session_csv(path: str | os.PathLike) -> Session:
         if missing:
             raise SpectrumFileError(
                 path, 1, f"the header lacks column(s) {missing}",
-                "the header must name kind,r,g,b,X,Y,Z (any order, any case); t_s, window, sr,sg,sb "
-                "and nm380..nm780 are optional",
+                "the header must name kind,r,g,b,X,Y,Z (any order, any case); t_s, window, sr,sg,sb, "
+                "eye, sync and nm380..nm780 are optional",
             )
         spectral = sorted(
             ((int(m.group(1)), i) for name, i in columns.items() if (m := _SPECTRAL.match(name))),
@@ -256,6 +262,7 @@ def read_session_csv(path: str | os.PathLike) -> Session:
         if surround_columns and len(surround_columns) != 3:
             raise SpectrumFileError(path, 1, f"the header has {surround_columns} but not all of sr,sg,sb",
                                     "give the surround as three columns sr,sg,sb (DAC 0..255) or none")
+        measured_how = {key: set() for key in MEASUREMENT_METADATA if key in columns}
         kinds, rgb, XYZ, t_s, spectra, window, surround = [], [], [], [], [], [], []
         data_lines: list[int] = []
         for line, row in enumerate(reader, start=2):
@@ -299,6 +306,13 @@ def read_session_csv(path: str | os.PathLike) -> Session:
                 surround.append(dac)
             if spectral:
                 spectra.append([_number(row[i], path, line, f"nm{w}") for w, i in spectral])
+            for key, values in measured_how.items():
+                values.add(row[columns[key]].strip())
+    mixed = [key for key, values in measured_how.items() if len(values) > 1]
+    if mixed:
+        raise SpectrumFileError(path, None, f"the {mixed[0]} column holds {sorted(measured_how[mixed[0]])}: "
+                                "rows measured differently (another panel, another sync) in one session",
+                                "split the file into one session per panel and sync mode")
     if not kinds:
         raise SpectrumFileError(path, None, "the file has a header but no measurements",
                                 "add one row per measured patch")
@@ -311,6 +325,7 @@ def read_session_csv(path: str | os.PathLike) -> Session:
         wavelengths=np.array([w for w, _ in spectral], dtype=float) if spectral else None,
         spectra=np.array(spectra) if spectral else None,
         source=str(path),
+        metadata={key: values.pop() for key, values in measured_how.items() if values and "" not in values},
         window=np.array(window) if window else None,
         surround=np.array(surround) if surround else None,
     )
@@ -324,6 +339,8 @@ def write_session_csv(session: Session, path: str | os.PathLike) -> Path:
         header.append("t_s")
     if session.window is not None:
         header += ["window", "sr", "sg", "sb"]
+    measured_how = [key for key in MEASUREMENT_METADATA if session.metadata.get(key)]
+    header += measured_how
     if session.spectra is not None:
         header += [f"nm{int(round(w))}" for w in session.wavelengths]
     with atomic_writer(path, newline="") as handle:
@@ -336,6 +353,7 @@ def write_session_csv(session: Session, path: str | os.PathLike) -> Path:
                 row.append(f"{session.t_s[i]:.3f}")
             if session.window is not None:
                 row += [f"{session.window[i]:.6g}", *(f"{v:g}" for v in session.surround[i])]
+            row += [str(session.metadata[key]) for key in measured_how]
             if session.spectra is not None:
                 row += [f"{v:.6g}" for v in session.spectra[i]]
             writer.writerow(row)

@@ -18,6 +18,7 @@ Units: seconds, nm, W·sr⁻¹·m⁻²·nm⁻¹, cd/m².
 from __future__ import annotations
 
 import logging
+import math
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -55,6 +56,7 @@ __all__ = [
     "Identity",
     "SpeedMode",
     "SyncMode",
+    "INTERNAL_SYNC_RANGE_HZ",
     "Measurement",
     "PortSelectionError",
     "CS2000",
@@ -129,6 +131,12 @@ class SpeedMode:
     nd: int
 
 
+INTERNAL_SYNC_RANGE_HZ = (20.0, 200.0)
+"""Frequencies internal sync (``SCMS,1,f``) accepts, Hz; sent in 0.01 Hz steps (20.00–200.00)."""
+
+_SYNC_NAMES = {0: "none", 1: "internal", 2: "external"}
+
+
 @dataclass(frozen=True)
 class SyncMode:
     """Synchronisation mode (``SCMS``/``SCMR``).
@@ -139,10 +147,52 @@ class SyncMode:
         0 no sync, 1 internal (to ``frequency_hz``), 2 external.
     frequency_hz
         Internal sync frequency in Hz (20–200), ``None`` for modes 0 and 2.
+
+    Examples
+    --------
+    >>> SyncMode.parse("internal:90")
+    SyncMode(mode=1, frequency_hz=90.0)
+    >>> SyncMode.parse("internal:89.91").text, SyncMode(0, None).text
+    ('internal:89.91', 'none')
     """
 
     mode: int
     frequency_hz: float | None
+
+    @classmethod
+    def parse(cls, text: str) -> "SyncMode":
+        """``none``, ``internal:HZ`` (20.00–200.00, 0.01 Hz steps) or ``external``.
+
+        Raises
+        ------
+        ValueError
+            Naming the bad text and what is accepted.
+        """
+        name, colon, rest = str(text).strip().partition(":")
+        if name in ("none", "external") and not colon:
+            return cls(0 if name == "none" else 2, None)
+        low, high = INTERNAL_SYNC_RANGE_HZ
+        if name == "internal" and colon:
+            try:
+                hz = float(rest)
+            except ValueError:
+                hz = math.nan
+            if not math.isfinite(hz) or not low <= hz <= high:
+                raise ValueError(f"sync {text!r}: internal sync takes {low:.2f}-{high:.2f} Hz (the panel's "
+                                 "refresh rate, e.g. internal:90 for a 90 Hz HMD)")
+            if abs(hz * 100 - round(hz * 100)) > 1e-6:
+                raise ValueError(f"sync {text!r}: the CS-2000 sets internal sync in 0.01 Hz steps; give at "
+                                 "most two decimals (e.g. internal:89.99)")
+            return cls(1, round(hz * 100) / 100)
+        raise ValueError(f"sync {text!r} is not understood; use none, internal:HZ ({low:g}-{high:g} Hz, "
+                         "e.g. internal:90) or external")
+
+    @property
+    def text(self) -> str:
+        """``none``, ``internal:HZ`` or ``external``, as :meth:`parse` reads it."""
+        if self.mode == 1:
+            return f"internal:{self.frequency_hz:g}"
+        return _SYNC_NAMES[self.mode]
 
 
 @dataclass(frozen=True, eq=False)
@@ -644,9 +694,10 @@ class CS2000:
         if mode not in _SYNC_MODES:
             raise ValueError(f"sync mode must be one of {_SYNC_MODES}, got {mode!r}")
         if mode == 1:
-            if frequency_hz is None or not 20 <= frequency_hz <= 200:
+            low, high = INTERNAL_SYNC_RANGE_HZ
+            if frequency_hz is None or not low <= frequency_hz <= high:
                 raise ValueError(
-                    f"internal sync needs frequency_hz in 20..200, got {frequency_hz!r}"
+                    f"internal sync needs frequency_hz in {low:g}..{high:g}, got {frequency_hz!r}"
                 )
             self._query("SCMS", 1, round(frequency_hz * 100))
         else:

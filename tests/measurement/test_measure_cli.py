@@ -314,7 +314,7 @@ def test_remote_mode_without_flash_writes_and_the_fallback_to_rmts_1(tmp_path, c
     assert read_journal(tmp_path / "a" / JOURNAL_NAME).header.settings["remote_mode"] == 2
     opened = _inject_faults(monkeypatch, ErrorFault("ER00", command="RMTS,2"))
     assert main(["measure", "--simulate", "--plan-file", plan, "--out", str(tmp_path / "b")]) == 0
-    assert opened[0].emulator.received[:3] == ["RMTS,2", "RMTS,1", "IDDR"]
+    assert opened[0].emulator.received[:2] == ["RMTS,2", "RMTS,1"] and "IDDR" in opened[0].emulator.received
     assert opened[0].emulator.received[-1] == "RMTS,0"
     assert read_journal(tmp_path / "b" / JOURNAL_NAME).header.settings["remote_mode"] == 1
 

@@ -3,7 +3,9 @@
 ::
 
     vr-workbench measure (--simulate [--effect ID[:MAGNITUDE]]... [--time-scale S] | --port DEVICE|auto)
-                         [--display simulated|window[:SCREEN]|tcp:HOST:PORT]
+                         [--display simulated|window[:SCREEN]|tcp:HOST:PORT
+                                    |rgb-text:HOST:PORT[:SETTLE_S]|value-shot:HOST:PORT]
+                         [--eye both|left|right] [--sync none|internal:HZ|external] [--target]
                          [--plan paper|quick|apl|paper+apl|paper+greys|authors-2024 | --plan-file FILE]
                          [--seed N] --out DIR [--resume | --add-plan FILE]
 
@@ -62,6 +64,27 @@ in extended mode; the measurement then runs off the GUI thread) or
 :mod:`instruments.patch_display`). With ``--simulate``, patches shown in a
 window or a VR application are also shown to the simulated headset, which is
 what the emulator measures.
+
+``rgb-text:HOST:PORT[:SETTLE_S]`` and ``value-shot:HOST:PORT`` drive an
+engine that follows the seed authors' own conventions (their Unity and
+Unreal projects; :mod:`instruments.engine_displays`): ``R,G,B`` on a new
+connection per patch and a settle time (default 2 s) instead of an
+acknowledgement, or ``Value:r,g,b`` on one connection, sent again every
+second until the engine answers ``SHOT``. They show full-field patches to
+both eyes only: a plan with APL patches, ``--eye left|right`` or
+``--target`` with them is refused before anything starts.
+
+``--eye left|right`` shows each patch to one panel (the other is black):
+the patch protocol's ``eye`` field (sent only when not ``both``, so a server
+that predates it sees nothing new otherwise; one that refuses it stops the
+run with a message, the journal kept for ``--resume``). A desktop window has
+no eyes and refuses it. ``--sync`` puts the CS-2000 in no, internal (``SCMS,1``
+at HZ × 100: ``internal:90`` → ``SCMS,1,9000``) or external sync for the run
+(``SCMS``, sent always, default ``none``; the previous mode is put back at
+the end). The journal header's settings record ``eye`` and ``sync``; a resume
+or ``--add-plan`` keeps them (``--eye``/``--sync`` given then must agree).
+``--target`` shows the centring target (``target`` of the patch protocol,
+rings and a cross in the patch window) and waits for Enter before the run.
 """
 
 from __future__ import annotations
@@ -72,18 +95,23 @@ import signal
 import sys
 import threading
 from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 from tqdm import tqdm
 
-from instruments.cs2000 import CS2000Error, open_cs2000
+from instruments.cs2000 import CS2000Error, SyncMode, open_cs2000
+from instruments.engine_displays import RGB_TEXT_DEFAULT_SETTLE_S, RgbTextPatchDisplay, ValueShotPatchDisplay
 from instruments.headset import HEADSET_EFFECTS, HeadsetError, parse_effect
 from instruments.patch_display import (
+    EYES,
     MirroredPatchDisplay,
     PatchDisplayError,
     SimulatedPatchDisplay,
     TcpPatchDisplay,
+    show_target,
 )
 from workbench.errors import InputError, WorkbenchError
 from workbench.measurement.journal import read_journal
@@ -99,7 +127,7 @@ from workbench.measurement.runner import (
 )
 from workbench.measurement.simulation import open_simulated_instrument
 
-__all__ = ["register", "parse_display"]
+__all__ = ["register", "DisplayKind", "DISPLAY_KINDS", "parse_display", "parse_sync"]
 
 _DISPLAY_TIMEOUT_S = 10.0
 _INSTRUMENT_TIMEOUT_S = 10.0  # design §6: read timeout at least 10 s
@@ -121,10 +149,23 @@ def register(subparsers) -> None:
                              f"{', '.join(HEADSET_EFFECTS)}")
     parser.add_argument("--time-scale", type=float, default=0.0, metavar="S",
                         help="with --simulate: fraction of real instrument timing to wait (default 0)")
-    parser.add_argument("--display", metavar="simulated|window[:SCREEN]|tcp:HOST:PORT",
+    parser.add_argument("--display", metavar="|".join(kind.syntax for kind in DISPLAY_KINDS.values()),
                         help="where patches are shown: the simulated headset (default with --simulate), a "
                              "full-screen window on screen SCREEN (default: the last, i.e. the headset in "
-                             "extended mode), or a VR application's patch server")
+                             "extended mode), a VR application's patch server (vr-workbench-patch/1), or an "
+                             "engine following the seed authors' Unity (rgb-text: R,G,B per connection, then "
+                             f"SETTLE_S seconds, default {RGB_TEXT_DEFAULT_SETTLE_S:g}) or Unreal convention "
+                             "(value-shot: Value:r,g,b until SHOT)")
+    parser.add_argument("--eye", choices=EYES, default=None,
+                        help="which panel shows the patches (default both; left/right: the other is black; "
+                             "needs a patch server of vr-workbench-patch/1 with 'eye', or the simulation)")
+    parser.add_argument("--sync", default=None, metavar="none|internal:HZ|external",
+                        help="the CS-2000's synchronisation to the panel (default none): internal:HZ at the "
+                             "panel's refresh rate (20-200 Hz, e.g. internal:90 for a 90 Hz HMD, whose "
+                             "low-persistence panel flashes once a frame), or external (a sync signal)")
+    parser.add_argument("--target", action="store_true",
+                        help="before the run, show the centring target (rings and a cross on black) and "
+                             "wait for Enter while the instrument is aimed at its centre")
     plans = parser.add_mutually_exclusive_group()
     plans.add_argument("--plan", choices=sorted(MEASUREMENT_PLANS), help="built-in plan (default paper)")
     plans.add_argument("--plan-file", metavar="FILE", help="CSV plan with columns kind,r,g,b (and optionally window,sr,sg,sb)")
@@ -140,11 +181,130 @@ def register(subparsers) -> None:
     parser.set_defaults(handler=_run)
 
 
-def parse_display(text: str | None, simulate: bool) -> tuple[str, tuple]:
-    """``("simulated", ())``, ``("window", (screen,))`` or ``("tcp", (host, port))`` from ``--display``.
+@dataclass(frozen=True)
+class DisplayKind:
+    """A kind of patch display ``--display`` can name (an entry of :data:`DISPLAY_KINDS`).
 
-    ``screen`` is the screen index given as ``window:SCREEN``, or ``None``
-    for plain ``window`` (the last screen).
+    Attributes
+    ----------
+    name : str
+        What ``--display`` starts with (``tcp``).
+    syntax, example : str
+        How it is spelt (``tcp:HOST:PORT``), and an example, for help and errors.
+    parse : callable
+        ``parse(rest)`` → the address tuple, from what follows ``NAME:``
+        (``None`` when there is no colon); raises ``ValueError`` saying what is wrong.
+    open : callable
+        ``open(stack, address, eye)`` → the :class:`~instruments.patch_display.PatchDisplay`
+        (entered into ``stack`` where it must be closed); ``None`` for the
+        displays this module opens itself (the simulated headset, the window).
+    eyes : bool
+        Whether it can show a patch to one eye (``--eye left|right``).
+    apl : bool
+        Whether it can show APL patches (a window on a surround).
+    target : str
+        ``"shown"`` (it draws the centring target), ``"nothing to aim"`` (the
+        simulation), or why it has none.
+    """
+
+    name: str
+    syntax: str
+    example: str
+    parse: Callable[[str | None], tuple]
+    open: Callable | None = None
+    eyes: bool = False
+    apl: bool = True
+    target: str = "shown"
+    eyes_refusal: str = ""
+
+
+def _no_address(rest):
+    if rest is not None:
+        raise ValueError("it takes no address")
+    return ()
+
+
+def _screen(rest):
+    if rest is None:
+        return (None,)
+    if rest.isdigit():
+        return (int(rest),)
+    raise ValueError(f"screen {rest!r} is not a number")
+
+
+def _host_port(rest):
+    host, _, port = (rest or "").rpartition(":")
+    if host and port.isdigit() and 0 < int(port) < 65536:
+        return host, int(port)
+    raise ValueError("it needs HOST:PORT")
+
+
+def _host_port_only(rest):
+    if (rest or "").count(":") != 1:
+        raise ValueError("it needs HOST:PORT")
+    return _host_port(rest)
+
+
+def _host_port_settle(rest):
+    parts = (rest or "").split(":")
+    if len(parts) == 3:
+        try:
+            settle = float(parts[2])
+        except ValueError:
+            raise ValueError(f"settle time {parts[2]!r} is not a number of seconds") from None
+        if not 0 <= settle <= 60:
+            raise ValueError(f"settle time {parts[2]} s must lie in 0..60 s")
+        return (*_host_port(":".join(parts[:2])), settle)
+    return (*_host_port_only(rest), RGB_TEXT_DEFAULT_SETTLE_S)
+
+
+def _open_tcp(stack, address, eye):
+    host, port = address
+    return stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S, client="vr-workbench", eye=eye))
+
+
+def _open_rgb_text(stack, address, eye):
+    host, port, settle_s = address
+    return stack.enter_context(RgbTextPatchDisplay(host, port, settle_s, _DISPLAY_TIMEOUT_S))
+
+
+def _open_value_shot(stack, address, eye):
+    host, port = address
+    return stack.enter_context(ValueShotPatchDisplay(host, port, _DISPLAY_TIMEOUT_S, VALUE_SHOT_RESEND_S))
+
+
+_AUTHORS_NO_EYES = ("shows every patch to both eyes (the convention has no eye); measure with --eye both, or "
+                    "show the patches with a patch server of vr-workbench-patch/1 (--display tcp:HOST:PORT)")
+
+DISPLAY_KINDS = {
+    kind.name: kind for kind in (
+        DisplayKind("simulated", "simulated", "simulated", _no_address, eyes=True, target="nothing to aim"),
+        DisplayKind("tcp", "tcp:HOST:PORT", "tcp:127.0.0.1:47800", _host_port, _open_tcp, eyes=True),
+        DisplayKind("window", "window[:SCREEN]", "window:1; screens count from 0", _screen,
+                    eyes_refusal="a desktop window has no eyes: it covers the whole screen, both panels of a "
+                                 "headset in extended mode; measure with --eye both (cover the other lens), or "
+                                 "show the patches in the VR application (--display tcp:HOST:PORT), which can "
+                                 "show a patch to one eye"),
+        DisplayKind("rgb-text", "rgb-text:HOST:PORT[:SETTLE_S]", "rgb-text:127.0.0.1:55001:2", _host_port_settle,
+                    _open_rgb_text, apl=False, eyes_refusal=_AUTHORS_NO_EYES,
+                    target="the authors' Unity convention (rgb-text) has no centring target"),
+        DisplayKind("value-shot", "value-shot:HOST:PORT", "value-shot:127.0.0.1:8890", _host_port_only,
+                    _open_value_shot, apl=False, eyes_refusal=_AUTHORS_NO_EYES,
+                    target="the authors' Unreal convention (value-shot) has no centring target"),
+    )
+}
+"""The patch displays ``--display`` names, by their prefix; :func:`parse_display` dispatches on it."""
+
+VALUE_SHOT_RESEND_S = 1.0
+"""How often ``--display value-shot`` sends the value again until the engine answers ``SHOT``."""
+
+
+def parse_display(text: str | None, simulate: bool) -> tuple[str, tuple]:
+    """``(kind, address)`` from ``--display``: the :data:`DISPLAY_KINDS` key and its parsed address.
+
+    E.g. ``("simulated", ())``, ``("window", (screen,))`` (``screen`` ``None``
+    for plain ``window``: the last screen), ``("tcp", (host, port))``,
+    ``("rgb-text", (host, port, settle_s))``, ``("value-shot", (host, port))``.
 
     Raises
     ------
@@ -156,21 +316,51 @@ def parse_display(text: str | None, simulate: bool) -> tuple[str, tuple]:
             return "simulated", ()
         raise InputError("--port needs --display tcp:HOST:PORT (the VR application's patch server) "
                          "or --display window[:SCREEN] (a full-screen window, e.g. on a headset in extended mode)")
-    if text == "simulated":
-        if not simulate:
-            raise InputError("--display simulated needs --simulate: a real CS-2000 cannot measure the "
-                             "simulated headset; use --display window[:SCREEN] or tcp:HOST:PORT")
-        return "simulated", ()
-    kind, colon, rest = text.partition(":")
-    if kind == "window" and not colon:
-        return "window", (None,)
-    if kind == "window" and rest.isdigit():
-        return "window", (int(rest),)
-    host, _, port = rest.rpartition(":")
-    if kind == "tcp" and host and port.isdigit() and 0 < int(port) < 65536:
-        return "tcp", (host, int(port))
-    raise InputError(f"--display {text!r} is not understood; use simulated or tcp:HOST:PORT "
-                     "(e.g. tcp:127.0.0.1:47800), or window[:SCREEN] (e.g. window:1; screens count from 0)")
+    name, colon, rest = text.partition(":")
+    kind = DISPLAY_KINDS.get(name)
+    reason = ""
+    if kind is not None:
+        try:
+            address = kind.parse(rest if colon else None)
+        except ValueError as error:
+            reason = f" ({kind.name}: {error})"
+        else:
+            if name == "simulated" and not simulate:
+                raise InputError("--display simulated needs --simulate: a real CS-2000 cannot measure the "
+                                 "simulated headset; use --display window[:SCREEN] or tcp:HOST:PORT")
+            return name, address
+    others = ", ".join(f"{k.syntax} (e.g. {k.example})" for k in DISPLAY_KINDS.values() if k.name != "simulated")
+    raise InputError(f"--display {text!r} is not understood; use simulated or {others}{reason}")
+
+
+def parse_sync(text: str | None) -> SyncMode:
+    """The CS-2000 sync mode of ``--sync`` (``none`` when not given).
+
+    Raises
+    ------
+    InputError
+        Naming the bad value and what is accepted (internal sync: 20.00–200.00 Hz).
+    """
+    try:
+        return SyncMode.parse("none" if text is None else text)
+    except ValueError as error:
+        raise InputError(f"--{error}") from None
+
+
+def _check_display_options(kind: DisplayKind, eye: str, run_plan, target: bool) -> None:
+    """Refuse, before anything starts, what the display cannot do: one eye, APL patches, a target."""
+    if eye != "both" and not kind.eyes:
+        raise InputError(f"--eye {eye}: --display {kind.name} {kind.eyes_refusal}")
+    apl = [p for p in run_plan.patches if p.is_apl] if run_plan is not None else []
+    if apl and not kind.apl:
+        raise InputError(
+            f"the plan {run_plan.name} has {len(apl)} APL patches (a window on a surround, e.g. "
+            f"{apl[0].describe()}), and --display {kind.name} shows full-field patches only; measure a plan "
+            "without APL patches (e.g. --plan paper), or show them with a patch server of "
+            "vr-workbench-patch/1 (--display tcp:HOST:PORT)")
+    if target and kind.target not in ("shown", "nothing to aim"):
+        raise InputError(f"--target: {kind.target}; aim the instrument at the centre of the field on a white "
+                         "patch in the engine, then run without --target")
 
 
 def _effects(texts: list) -> dict:
@@ -208,14 +398,18 @@ def _run(args) -> int:
     else:
         plan = _requested_plan(args)
         journal = read_journal(f"{args.out}/{JOURNAL_NAME}") if args.resume else None
-    settings = {"simulated": bool(args.simulate)}
+    eye, sync = args.eye or "both", parse_sync(args.sync)
+    settings = {"simulated": bool(args.simulate), "eye": eye, "sync": sync.text}
     if journal is not None:
         _check_resume_settings(journal, args, effects)
+        eye, sync = _recorded_eye_and_sync(journal, args)
         settings = journal.header.settings
         effects = settings.get("effects", effects) if args.simulate else effects
     run_plan = plan if journal is None else journal.header.plan
     if added is not None:
         run_plan = journal.header.with_added(added).plan
+    _check_display_options(DISPLAY_KINDS[display_kind], eye, run_plan, args.target)
+    if added is not None:
         print(f"measure: adding the {len(added)} patches of {args.add_plan} to the {len(journal.header.plan)} "
               f"of {args.out}", file=sys.stderr)
     noise_seed, noise = _noise_seed(args, run_plan, journal) if args.simulate else (None, None)
@@ -245,12 +439,15 @@ def _run(args) -> int:
                 run_settings = {**run_settings, "effects": effects, "time_scale": args.time_scale,
                                 "session_length_s": simulation.headset.session_length_s,
                                 "noise_seed": noise_seed}
-            display = _open_display(stack, display_kind, display_address, simulation, window_display)
+            display, shown = _open_display(stack, display_kind, display_address, simulation, window_display, eye)
             port = simulation.server.port if simulation else (None if args.port == "auto" else args.port)
             # RMTS,2 spares the instrument's flash memory; firmware that answers it with an error
             # code gets RMTS,1 (the driver falls back, and logs it).
             meter = stack.enter_context(open_cs2000(port, timeout_s=_INSTRUMENT_TIMEOUT_S,
                                                     no_flash_write="if-supported"))
+            _set_sync(stack, meter, sync)
+            if args.target:
+                _aim(display_kind, shown, eye, ctrl_c)
             options = {"clock": (lambda header, journal: simulation.clock)} if simulation else {}
             if journal is None:
                 run_settings = {**run_settings, "remote_mode": meter.remote_mode}  # RMTS,2 or the fallback
@@ -351,20 +548,102 @@ def _check_resume_settings(journal, args, effects: dict) -> None:
         )
 
 
-def _open_display(stack: ExitStack, kind: str, address: tuple, simulation, window_display=None):
-    """The patch display for ``--display``; ``window_display`` is the patch window's, opened by the caller."""
+def _recorded_eye_and_sync(journal, args) -> tuple:
+    """The eye and sync of the journaled session (a journal from before they were recorded: both, none);
+    ``--eye``/``--sync`` given on resume must be the same."""
+    recorded_eye = journal.header.settings.get("eye", "both")
+    recorded_sync = parse_sync(journal.header.settings.get("sync", "none"))
+    again = "add the plan" if getattr(args, "add_plan", None) else "resume"
+    if args.eye is not None and args.eye != recorded_eye:
+        raise InputError(f"{journal.path} measured the {_panel(recorded_eye)}, not the {_panel(args.eye)}: "
+                         f"{again} with --eye {recorded_eye} (or leave --eye out), or measure the other panel "
+                         "as a new session into another --out directory")
+    if args.sync is not None and parse_sync(args.sync) != recorded_sync:
+        raise InputError(f"{journal.path} was measured with --sync {recorded_sync.text}, not {args.sync}: "
+                         f"{again} with --sync {recorded_sync.text} (or leave --sync out); a session mixing "
+                         "synchronised and unsynchronised measurements of a pulsed panel scatters")
+    return recorded_eye, recorded_sync
+
+
+def _panel(eye: str) -> str:
+    return "panels of both eyes" if eye == "both" else f"{eye} eye's panel"
+
+
+def _set_sync(stack: ExitStack, meter, sync: SyncMode) -> None:
+    """Put the CS-2000 in ``sync`` (``SCMS``) for the run, and back as it was when the run ends."""
+    previous = meter.sync_mode()
+    meter.set_sync_mode(sync.mode, sync.frequency_hz)
+
+    def restore():
+        if previous == sync:
+            return
+        try:
+            meter.set_sync_mode(previous.mode, previous.frequency_hz)
+        except (CS2000Error, OSError, ValueError) as error:  # the run's outcome stands; say it
+            print(f"measure: could not put the CS-2000's sync back to {previous.text} ({error})", file=sys.stderr)
+
+    stack.callback(restore)
+
+
+def _aim(kind: str, display, eye: str, ctrl_c: "_CtrlCCancels") -> None:
+    """``--target``: show the centring target and wait for Enter (the simulation has nothing to aim at)."""
+    if DISPLAY_KINDS[kind].target == "nothing to aim":
+        print("measure: --target: the simulated headset has nothing to aim at; measuring", file=sys.stderr)
+        return
+    shown = display
+    if getattr(display, "target", None) is None and hasattr(display, "_display"):
+        # measure_window.WorkerPatchDisplay has no target() yet: its QtPatchDisplay (the window) draws it.
+        shown = display._display
+    try:
+        show_target(shown, eye)
+    except PatchDisplayError as error:
+        raise WorkbenchError(str(error)) from None
+    where = "" if eye == "both" else f" in the {eye} eye"
+    _wait_for_enter(f"measure: the centring target is shown{where} on {display.describe()}: aim the CS-2000 "
+                    "through the lens at the centre of the rings and focus, then press Enter to measure "
+                    "(Ctrl-C stops)", ctrl_c)
+
+
+def _wait_for_enter(prompt: str, ctrl_c: "_CtrlCCancels") -> None:
+    """Print ``prompt`` on stderr and wait for a line on stdin; Ctrl-C stops (from any thread)."""
+    print(prompt, file=sys.stderr, flush=True)
+    got: dict = {}
+    done = threading.Event()
+
+    def read() -> None:
+        try:
+            got["line"] = sys.stdin.readline()
+        except (OSError, ValueError) as error:
+            got["error"] = error
+        done.set()
+
+    threading.Thread(target=read, name="wait-for-enter", daemon=True).start()
+    while not done.wait(0.1):
+        if ctrl_c.pressed:
+            raise KeyboardInterrupt
+    if not got.get("line"):
+        raise InputError("--target waits for Enter on standard input, which is closed; run measure in a "
+                         "terminal, or leave out --target")
+
+
+def _open_display(stack: ExitStack, kind: str, address: tuple, simulation, window_display=None, eye="both"):
+    """``(display, shown)``: the patch display for ``--display`` and what shows the patches to the user.
+
+    ``window_display`` is the patch window's, opened by the caller. With the
+    simulation, ``display`` also shows each patch to the simulated headset.
+    """
     if kind == "simulated":
-        return SimulatedPatchDisplay(simulation.headset)
+        display = SimulatedPatchDisplay(simulation.headset)
+        return display, display
     if kind == "window":
         shown = window_display
     else:
-        host, port = address
         try:
-            shown = stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S, client="vr-workbench"))
+            shown = DISPLAY_KINDS[kind].open(stack, address, eye)
         except PatchDisplayError as error:
             raise WorkbenchError(str(error)) from None
     # A simulated session measures the simulated headset, so it must see the patches too.
-    return MirroredPatchDisplay(shown, SimulatedPatchDisplay(simulation.headset)) if simulation else shown
+    return (MirroredPatchDisplay(shown, SimulatedPatchDisplay(simulation.headset)) if simulation else shown), shown
 
 
 def _measure_in_patch_window(screen_index: int | None, measure_on, ctrl_c: _CtrlCCancels):

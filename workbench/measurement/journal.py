@@ -8,7 +8,13 @@ A journal is a text file of JSON lines (``journal.jsonl``):
         "started_utc": "2025-01-01T12:00:00+00:00", "started_epoch_s": 1735732800.0,
         "plan": {"name": "paper", "seed": 7, "patches": [["black", 0, 0, 0], ...]},
         "instrument": {"name": "CS-2000", "model": "CS-2000", "serial": "12345"},
-        "display": "simulated OLED HMD (...)", "settings": {...}}
+        "display": "simulated OLED HMD (...)", "settings": {..., "eye": "both", "sync": "internal:90"}}
+
+   ``settings`` holds, besides a simulation's effects and seed, which panel
+   showed the patches (``eye``: ``both``, ``left`` or ``right``) and the
+   instrument's sync mode (``sync``: ``none``, ``internal:HZ``, ``external``),
+   for journals written since they are recorded (:attr:`JournalHeader.eye`,
+   :attr:`JournalHeader.sync`); the session's metadata carries them on;
 
 2. one **measurement** record per patch, appended, flushed and ``fsync``-ed
    before the next patch is shown::
@@ -30,6 +36,18 @@ A journal is a text file of JSON lines (``journal.jsonl``):
    :attr:`Journal.header` is then the header with the grown plan (the file's
    header line is never rewritten), so a ``--resume`` after a crash in the
    follow-up measures what is left of it like any other pending patch.
+
+4. a **decision** record each time a dynamic plan (``measure --plan adaptive``,
+   :mod:`workbench.measurement.adaptive`) chooses what to measure next::
+
+       {"record": "decision", "number": 3, "patches": [["ramp-b", 0, 0, 60]],
+        "reason": "blue tone curve between DAC 32 and 64: ...", ...}
+
+   written (fsynced) before its patches are measured; like an ``add_plan``
+   the plan grows by its patches (numbered on from the last index, the plan
+   keeps its name), so a resumed run measures what a decision added and the
+   planner, reading the same measurements, goes on from the same state.
+   :attr:`Journal.decisions` holds them in file order.
 
 Nothing is ever rewritten in place. A crash can leave a truncated last line;
 :func:`read_journal` ignores it (and reports that it did), and
@@ -147,6 +165,18 @@ class JournalHeader:
         """Start time, ISO 8601 in UTC."""
         return _utc_iso(self.started_epoch_s)
 
+    @property
+    def eye(self) -> str | None:
+        """Which panel showed the patches (``both``, ``left``, ``right``; ``measure --eye``), from
+        ``settings``; ``None`` for a journal written before it was recorded."""
+        return self.settings.get("eye")
+
+    @property
+    def sync(self) -> str | None:
+        """The CS-2000's sync mode during the session (``none``, ``internal:HZ``, ``external``;
+        ``measure --sync``), from ``settings``; ``None`` for a journal written before it was recorded."""
+        return self.settings.get("sync")
+
     def to_json(self) -> dict:
         return {
             "record": "header",
@@ -171,6 +201,11 @@ class JournalHeader:
         """
         name = f"{self.plan.name} + {Path(added.name).name}"
         return replace(self, plan=MeasurementPlan(name, self.plan.patches + tuple(added.patches),
+                                                  self.plan.seed))
+
+    def with_decision(self, patches) -> "JournalHeader":
+        """This header with a dynamic plan's decided ``patches`` appended (the plan keeps its name)."""
+        return replace(self, plan=MeasurementPlan(self.plan.name, self.plan.patches + tuple(patches),
                                                   self.plan.seed))
 
     @classmethod
@@ -226,6 +261,9 @@ class JournalRecord:
         Fraction of the field the patch covered (1: full field).
     surround : (int, int, int)
         DAC values of the rest of the field.
+    measurement_time_s : float or None
+        The measurement time the instrument announced (the CS-2000's
+        ``OK00,ttt`` reply to ``MEAS,1``), where the meter reports one.
     """
 
     index: int
@@ -245,6 +283,7 @@ class JournalRecord:
     warning: str = ""
     window: float = 1.0
     surround: tuple = (0, 0, 0)
+    measurement_time_s: float | None = None
 
     @property
     def ok(self) -> bool:
@@ -282,6 +321,8 @@ class JournalRecord:
                 }
             if self.warning:
                 data["warning"] = self.warning
+            if self.measurement_time_s is not None:  # the seconds MEAS,1 announced (OK00,ttt)
+                data["measurement_time_s"] = self.measurement_time_s
         else:
             data["reason"] = self.reason
         return data
@@ -311,6 +352,8 @@ class JournalRecord:
             warning=str(data.get("warning", "")),
             window=float(data.get("window", 1.0)),
             surround=tuple(int(v) for v in data.get("surround", (0, 0, 0))),
+            measurement_time_s=(None if data.get("measurement_time_s") is None
+                                else float(data["measurement_time_s"])),
         )
 
 
@@ -334,6 +377,9 @@ class Journal:
         Length of the file when it was read (``None`` for a journal put
         together in memory); :meth:`JournalWriter.append_to` refuses a file
         that has changed since.
+    decisions : tuple of dict
+        The decision records of a dynamic plan, in file order (their patches
+        are in the header's plan already).
     """
 
     path: Path
@@ -343,6 +389,7 @@ class Journal:
     truncated: bool = False
     complete_bytes: int = 0
     size_bytes: int | None = None
+    decisions: tuple = ()
 
     def latest(self) -> dict:
         """The latest record of each plan index that has one: ``{index: JournalRecord}``."""
@@ -393,7 +440,7 @@ def read_journal(path: str | os.PathLike) -> Journal:
     tail = lines.pop()  # bytes after the last newline: empty, or a line cut short by a crash
     truncated = bool(tail.strip())
     complete_bytes = len(data) - len(tail)
-    header, records, resumes = None, [], []
+    header, records, resumes, decisions = None, [], [], []
     for number, raw in enumerate(lines, start=1):
         if not raw.strip():
             continue
@@ -420,6 +467,9 @@ def read_journal(path: str | os.PathLike) -> Journal:
                     header = header.with_added(MeasurementPlan(str(added.get("name", "added plan")),
                                                                patches, None))
                 resumes.append(entry)
+            elif kind == "decision":
+                header = header.with_decision(tuple(_patch_of(p) for p in entry.get("patches", ())))
+                decisions.append(entry)
             else:
                 raise ValueError(f"unknown record type {kind!r}")
         except (ValueError, KeyError, TypeError) as error:
@@ -430,7 +480,8 @@ def read_journal(path: str | os.PathLike) -> Journal:
     if header is None:
         raise SpectrumFileError(path, 1, "no header record",
                                 "the run died before it started; delete the directory and start again")
-    return Journal(path, header, tuple(records), tuple(resumes), truncated, complete_bytes, len(data))
+    return Journal(path, header, tuple(records), tuple(resumes), truncated, complete_bytes, len(data),
+                   tuple(decisions))
 
 
 class JournalWriter:
@@ -529,6 +580,13 @@ class JournalWriter:
         self._write(entry)
         return JournalRecord.from_json(entry)
 
+    def write_decision(self, entry: dict) -> dict:
+        """Append a dynamic plan's decision record (``entry`` JSON-able, with ``patches``); on
+        return it is on disk. Returns the record as written."""
+        record = {"record": "decision", **entry}
+        self._write(record)
+        return record
+
     def close(self) -> None:
         """Close the file, which releases the lock."""
         if not self._handle.closed:
@@ -620,7 +678,8 @@ def journal_to_session(journal: Journal) -> Session:
         spectra=spectra,
         source=str(journal.path),
         metadata={"plan": journal.header.plan.name, "instrument": journal.header.instrument,
-                  "display": journal.header.display, "software": journal.header.software},
+                  "display": journal.header.display, "software": journal.header.software,
+                  **{key: value for key in ("eye", "sync") if (value := getattr(journal.header, key))}},
         window=np.array([r.window for r in records]) if apl else None,
         surround=np.array([r.surround for r in records], dtype=float) if apl else None,
     )
