@@ -91,3 +91,27 @@ def test_an_unknown_screen_is_one_clear_message(qtbot, tmp_path, capsys):
                  "--out", str(tmp_path)]) == 2
     assert "no screen 7; choose one of: 0: " in capsys.readouterr().err
     assert not (tmp_path / JOURNAL_NAME).exists()
+
+
+def test_measure_target_draws_the_target_in_the_window_and_waits_for_enter(qtbot, tmp_path, capsys,
+                                                                           monkeypatch):
+    import io
+
+    from workbench.gui.patch_window import TARGET_FRAME
+
+    frames = []
+
+    class TargetRecordingWindow(PatchWindow):
+        def paintEvent(self, event):  # noqa: N802 - Qt's name
+            super().paintEvent(event)
+            frames.append(self.last_painted_frame)
+
+    monkeypatch.setattr(measure_window, "PatchWindow", TargetRecordingWindow)
+    monkeypatch.setattr("sys.stdin", io.StringIO("\n"))
+    plan_file = tmp_path / "plan.csv"
+    plan_file.write_text("kind,r,g,b\nwhite,255,255,255\nblack,0,0,0\n")
+    assert main(["measure", "--simulate", "--display", "window", "--target", "--plan-file", str(plan_file),
+                 "--out", str(tmp_path / "run")]) == 0
+    assert "centring target is shown on full-screen patch window" in capsys.readouterr().err
+    shown = [f for f in frames if f is not None and f != ([0, 0, 0], 1.0, [0, 0, 0])]
+    assert shown[0] == TARGET_FRAME and shown.index(([255, 255, 255], 1.0, [0, 0, 0])) > 0

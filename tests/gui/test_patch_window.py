@@ -115,3 +115,36 @@ def test_an_apl_patch_is_a_centred_window_on_its_surround(qtbot):
     assert _colour_at(window, 1, 1) == [20, 30, 40]
     display.show([9, 9, 9])  # full field again: the surround is gone
     assert _colour_at(window, 1, 1) == [9, 9, 9] and window.frame == ([9, 9, 9], 1.0, [0, 0, 0])
+
+
+def test_the_centring_target_is_rings_and_a_cross_on_black_until_the_next_patch(qtbot):
+    from workbench.gui.patch_window import TARGET_FRAME, TARGET_RING_FRACTIONS
+
+    window = PatchWindow(0)
+    qtbot.addWidget(window)
+    display = QtPatchDisplay(window, timeout_s=5.0)
+    qtbot.waitExposed(window)
+    display.show([200, 10, 10])
+
+    def worker():
+        display.target()  # from the measurement's thread, as measure --target does
+        assert window.last_painted_frame == TARGET_FRAME
+
+    assert _run_in_worker(qtbot, worker) == []
+    width, height = window.width(), window.height()
+    cx, cy, side = width // 2, height // 2, min(width, height)
+    white, black = [255, 255, 255], [0, 0, 0]
+    assert window.target_rings_px() == pytest.approx([f * side for f in TARGET_RING_FRACTIONS])
+    for fraction in TARGET_RING_FRACTIONS:  # on each ring, right of the centre, away from the cross
+        x = round(width / 2 + fraction * side)
+        on_ring = [_colour_at(window, x + dx, cy - 0) for dx in (-1, 0)]
+        assert white in on_ring, fraction
+        between = round(width / 2 + (fraction - 0.05) * side)  # half-way to the ring inside it
+        assert _colour_at(window, between, round(height / 2 + 0.3 * (fraction - 0.05) * side)) == black
+    assert _colour_at(window, 2, cy) == white or _colour_at(window, 2, cy - 1) == white  # the cross, across
+    assert _colour_at(window, cx, 2) == white or _colour_at(window, cx - 1, 2) == white
+    assert _colour_at(window, 3, 3) == black
+    with pytest.raises(PatchDisplayError, match="cannot show the target to the left eye only"):
+        display.target("left")
+    display.show([9, 9, 9])  # the next patch replaces it
+    assert window.frame == ([9, 9, 9], 1.0, [0, 0, 0]) and _colour_at(window, cx, cy) == [9, 9, 9]

@@ -3,8 +3,11 @@
 For headsets in extended mode (the HMD appears as a second monitor) and for
 ordinary monitors. :class:`PatchWindow` is a borderless full-screen widget of
 one solid colour, or, for an APL patch, a centred rectangle of the screen's
-aspect ratio covering the fraction ``window`` of its area on a surround colour;
-:class:`QtPatchDisplay` adapts it to the
+aspect ratio covering the fraction ``window`` of its area on a surround colour,
+or the **centring target** (:meth:`PatchWindow.set_target`: white rings at
+:data:`TARGET_RING_FRACTIONS` of the smaller side in radius and a cross through
+the centre, 2-pixel lines, on black; what the patch protocol's ``target``
+draws, to aim the instrument before a run); :class:`QtPatchDisplay` adapts it to the
 :class:`~instruments.patch_display.PatchDisplay` protocol, so that the
 measurement runner, working off the GUI thread, can call ``show(rgb)`` and get
 control back once the window has painted the patch.
@@ -20,18 +23,26 @@ from __future__ import annotations
 import logging
 import threading
 
-from PySide6.QtCore import QMetaObject, QObject, QRect, Qt, QThread, Signal, Slot
-from PySide6.QtGui import QColor, QGuiApplication, QPainter
+from PySide6.QtCore import QMetaObject, QObject, QPointF, QRect, Qt, QThread, Signal, Slot
+from PySide6.QtGui import QColor, QGuiApplication, QPainter, QPen
 from PySide6.QtWidgets import QWidget
 
-from instruments.patch_display import (PatchDisplayError, is_apl_patch, validate_patch_rgb,
+from instruments.patch_display import (PatchDisplayError, is_apl_patch, validate_eye, validate_patch_rgb,
                                        validate_patch_window)
 from workbench.errors import InputError
 
-__all__ = ["PatchWindow", "QtPatchDisplay", "screen_names"]
+__all__ = ["PatchWindow", "QtPatchDisplay", "screen_names", "TARGET_RING_FRACTIONS", "TARGET_LINE_PX",
+           "TARGET_FRAME"]
 
 _LOG = logging.getLogger(__name__)
 _FULL_COLOUR_DEPTH = 24  # bits per pixel that carry 8-bit DAC values unchanged
+
+TARGET_RING_FRACTIONS = (0.10, 0.20, 0.30, 0.40)
+"""Radii of the centring target's rings, as fractions of the window's smaller side."""
+TARGET_LINE_PX = 2
+"""Width of the target's rings and cross, pixels."""
+TARGET_FRAME = "target"
+"""What :attr:`PatchWindow.frame` is while the centring target is shown."""
 
 
 def screen_names() -> list[str]:
@@ -84,6 +95,7 @@ class PatchWindow(QWidget):
         self._rgb = [0, 0, 0]
         self._window = 1.0
         self._surround = [0, 0, 0]
+        self._target = False
         self.paint_count = 0
         self.last_painted: list | None = None
         self.last_painted_frame: tuple | None = None
@@ -94,9 +106,22 @@ class PatchWindow(QWidget):
         return list(self._rgb)
 
     @property
-    def frame(self) -> tuple:
-        """``(rgb, window, surround)`` of the frame on screen."""
+    def frame(self) -> tuple | str:
+        """``(rgb, window, surround)`` of the frame on screen, or :data:`TARGET_FRAME`."""
+        if self._target:
+            return TARGET_FRAME
         return list(self._rgb), self._window, list(self._surround)
+
+    @Slot()
+    def set_target(self) -> None:
+        """Show the centring target until the next patch (GUI thread): repaint at once."""
+        self._target = True
+        self.repaint()
+
+    def target_rings_px(self) -> list:
+        """The target's ring radii, pixels: :data:`TARGET_RING_FRACTIONS` of the smaller side."""
+        side = min(self.width(), self.height())
+        return [fraction * side for fraction in TARGET_RING_FRACTIONS]
 
     @Slot(list)
     def set_patch(self, rgb: list) -> None:
@@ -109,6 +134,7 @@ class PatchWindow(QWidget):
         self._rgb = validate_patch_rgb(rgb)
         self._window = validate_patch_window(window)
         self._surround = validate_patch_rgb(surround)
+        self._target = False
         self.repaint()
 
     def patch_rect(self):
@@ -121,8 +147,28 @@ class PatchWindow(QWidget):
         return QRect(rect.x() + (rect.width() - width) // 2, rect.y() + (rect.height() - height) // 2,
                      width, height)
 
+    def _paint_target(self, painter: QPainter) -> None:
+        painter.fillRect(self.rect(), QColor(0, 0, 0))
+        painter.setRenderHint(QPainter.RenderHint.Antialiasing, False)
+        pen = QPen(QColor(255, 255, 255))
+        pen.setWidth(TARGET_LINE_PX)
+        painter.setPen(pen)
+        painter.setBrush(Qt.BrushStyle.NoBrush)
+        centre = QPointF(self.width() / 2, self.height() / 2)
+        for radius in self.target_rings_px():
+            painter.drawEllipse(centre, radius, radius)
+        painter.drawLine(QPointF(0, centre.y()), QPointF(self.width(), centre.y()))
+        painter.drawLine(QPointF(centre.x(), 0), QPointF(centre.x(), self.height()))
+
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt's name
         painter = QPainter(self)
+        if self._target:
+            self._paint_target(painter)
+            painter.end()
+            self.paint_count += 1
+            self.last_painted_frame = TARGET_FRAME
+            self.painted.emit([])
+            return
         if self._window < 1.0:
             painter.fillRect(self.rect(), QColor(*self._surround))
         painter.fillRect(self.patch_rect(), QColor(*self._rgb))
@@ -138,6 +184,7 @@ class _Bridge(QObject):
 
     request = Signal(list)
     frame_request = Signal(list, float, list)
+    target_request = Signal()
 
 
 class QtPatchDisplay:
@@ -161,6 +208,7 @@ class QtPatchDisplay:
         self._bridge.moveToThread(window.thread())
         self._bridge.request.connect(window.set_patch, Qt.ConnectionType.QueuedConnection)
         self._bridge.frame_request.connect(window.set_frame, Qt.ConnectionType.QueuedConnection)
+        self._bridge.target_request.connect(window.set_target, Qt.ConnectionType.QueuedConnection)
         self._painted = threading.Event()
         self._wanted: tuple | None = None
         window.painted.connect(self._on_painted, Qt.ConnectionType.DirectConnection)
@@ -190,6 +238,29 @@ class QtPatchDisplay:
         if not self._painted.wait(self.timeout_s):
             raise PatchDisplayError(
                 f"the patch window did not paint {rgb} within {self.timeout_s:g} s; "
+                "is the GUI event loop running (and the window on a connected screen)?"
+            )
+
+    def target(self, eye: str = "both") -> None:
+        """Show the centring target (from any thread); return once painted.
+
+        Raises
+        ------
+        PatchDisplayError
+            For ``eye`` left or right: a window on a screen has no eyes.
+        """
+        if validate_eye(eye) != "both":
+            raise PatchDisplayError(f"the patch window cannot show the target to the {eye} eye only: a "
+                                    "window covers the whole screen; use --eye both")
+        if QThread.currentThread() is self.window.thread():
+            self.window.set_target()
+            return
+        self._painted.clear()
+        self._wanted = TARGET_FRAME
+        self._bridge.target_request.emit()
+        if not self._painted.wait(self.timeout_s):
+            raise PatchDisplayError(
+                f"the patch window did not paint the centring target within {self.timeout_s:g} s; "
                 "is the GUI event loop running (and the window on a connected screen)?"
             )
 
