@@ -300,13 +300,19 @@ class MeasurementRun:
     wall_clock : callable
         Monotonic wall-clock seconds, for the time each patch takes (the ETA)
         and the run's wall time; :func:`time.monotonic` by default.
+    planner : object, optional
+        A dynamic plan (:class:`~workbench.measurement.adaptive.AdaptivePlanner`):
+        once every patch of the plan so far has been tried, the run calls
+        ``planner.decide(journal)`` with :meth:`journal_so_far`; a decision
+        with patches is journaled (a ``decision`` record, fsynced) and its
+        patches are measured next; ``None`` ends the run.
     """
 
     def __init__(self, out_dir: Path, header: JournalHeader, journal: Journal | None, writer: JournalWriter,
                  display, meter: Meter, clock: SessionClock, *,
                  on_countdown: Callable[[float, float], None] | None = None,
                  settle_s: float = 0.0, max_consecutive_failures: int = 3,
-                 wall_clock: Callable[[], float] = time.monotonic, remeasure=()):
+                 wall_clock: Callable[[], float] = time.monotonic, remeasure=(), planner=None):
         self.out_dir = Path(out_dir)
         self.header = header
         self.plan: MeasurementPlan = header.plan
@@ -326,6 +332,9 @@ class MeasurementRun:
         self._running = threading.Event()
         self._running.set()
         self.durations = PatchDurationModel()
+        self.planner = planner
+        self.decisions: list = []  # this run's decision records (a dynamic plan's), as journaled
+        self._decisions_read = () if journal is None else tuple(journal.decisions)
 
     # -- construction -------------------------------------------------------------------
 
@@ -473,7 +482,8 @@ class MeasurementRun:
 
     def journal_so_far(self) -> Journal:
         """The journal's header and measurement records so far (earlier runs' and this run's), from memory."""
-        return Journal(self._writer.path, self.header, tuple(self._records))
+        return Journal(self._writer.path, self.header, tuple(self._records),
+                       decisions=tuple(self._decisions_read) + tuple(self.decisions))
 
     def events(self) -> Iterator:
         """Perform the run, yielding one event per step; the last is :class:`RunFinished`.
@@ -492,7 +502,10 @@ class MeasurementRun:
             yield RunStarted(total, self._done(), self._resumed)
             consecutive_failures = 0
             status = "finished"
-            for position, index in enumerate(pending):
+            if not pending:
+                pending = self._grow_plan()  # a dynamic plan resumed between two decisions
+                total = len(self.plan)
+            for position, index in enumerate(pending):  # a dynamic plan's list grows as it goes
                 if not self._running.is_set() and not self._cancel.is_set():
                     yield RunPaused(self._done(), total, index)
                     while not self._running.wait(_PAUSE_POLL_S):
@@ -527,6 +540,9 @@ class MeasurementRun:
                         "(failed patches are measured again)",
                         index, patch,
                     )
+                if position + 1 == len(pending):  # the last pending patch: a dynamic plan decides
+                    pending += self._grow_plan()
+                    total = len(self.plan)
             outputs = (self._writer.path,)
             if status == "finished":
                 outputs += self.export()
@@ -536,6 +552,21 @@ class MeasurementRun:
             yield RunFinished(summary)
         finally:
             self._writer.close()
+
+    def _grow_plan(self) -> list:
+        """Ask the dynamic plan for its next patches (journaled before they are measured);
+        their plan indices, or [] when it has none (or there is no planner)."""
+        if self.planner is None or self._cancel.is_set():
+            return []
+        decision = self.planner.decide(self.journal_so_far())
+        if decision is None or not decision.patches:
+            return []
+        record = self._writer.write_decision(decision.to_json())
+        start = len(self.plan)
+        self.header = self.header.with_decision(decision.patches)
+        self.plan = self.header.plan
+        self.decisions.append(record)
+        return list(range(start, len(self.plan)))
 
     def _measure_patch(self, index: int, patch: Patch) -> tuple[JournalRecord, float] | None:
         """Show and measure one patch: the record to journal and the wall seconds it
@@ -593,6 +624,7 @@ class MeasurementRun:
             wavelengths=None if warning else wavelengths,
             spectrum=None if warning else spectrum,
             warning=warning,
+            measurement_time_s=_announced_s(measurement),
         )
         return record, self.wall_clock() - wall_start
 
@@ -641,6 +673,12 @@ def _check_addition(journal: Journal, add_plan: MeasurementPlan, display) -> Non
             f"shown on {shown_on!r}: a follow-up must be shown the way the session was (the same panel "
             "through the same runtime), or its rows do not belong in the session; use the session's "
             "--display (and --effect), or measure the plan as a new session with --plan-file")
+
+
+def _announced_s(measurement) -> float | None:
+    """The measurement time the instrument announced (``OK00,ttt``), where the meter reports it."""
+    value = getattr(measurement, "measurement_time_s", None)
+    return None if value is None or not math.isfinite(float(value)) else float(value)
 
 
 def _identity(meter: Meter) -> dict:

@@ -1,0 +1,574 @@
+"""The adaptive plan: measure what lowers the predicted held-out error most per second of instrument time.
+
+``measure --plan adaptive [--budget-min M] [--target-dE00 T]`` starts from a
+small core (:func:`adaptive_core_plan`: a white, the black, each primary at
+full drive, :data:`CORE_LEVELS` per channel, the greys :data:`CORE_GREYS`,
+and a white), then asks :class:`AdaptivePlanner` after each measurement what
+to measure next. Each decision is a deterministic function of the journal's
+measurements and the seed, and is journaled (a ``decision`` record, fsynced
+before its patch is shown) with its reason, e.g. ``"blue tone curve between
+DAC 32 and 64: predicted held-out ΔE00 0.310 → 0.270 for 6 s"``; a run
+resumed after a crash reads the same measurements and makes the same
+decisions.
+
+How it chooses (each decision):
+
+1. The fit rows so far (never a validation row) are divided by the drift of
+   the white references, and the session's noise model is estimated from
+   them (:func:`workbench.diagnostics.noise.estimate_noise`).
+2. At checkpoints (the first decision, then whenever the fit rows have grown
+   by :data:`CHECKPOINT_GROWTH`), the rows are diagnosed
+   (:func:`workbench.diagnostics.diagnose`) and the follow-up the diagnosis
+   proposes (:func:`workbench.diagnostics.follow_up.propose_follow_up`: the
+   greys and partial-drive mixtures that identify a channel interaction's
+   shape or an unexplained residual) joins the candidates.
+3. :class:`~workbench.measurement.planning_model.PlanningModel` predicts the
+   held-out mean ΔE00 of a model of these rows on colours spread over the
+   whole cube, and, for every candidate (a sweep level of each channel every
+   4 DAC, greys every 8 DAC, mixtures on a 5-level cube, the follow-up's
+   patches, another reading of a full-drive primary), the predicted error
+   after measuring it.
+4. The time it costs comes from the instrument
+   (:class:`~workbench.measurement.patch_cost.PatchCostModel`: the seconds
+   ``MEAS,1`` announced and the seconds each patch took in this session,
+   against luminance; the candidate's luminance as the surrogate predicts it).
+5. The candidate with the largest predicted reduction per second is chosen,
+   unless a drift reference is due: a white once
+   :data:`DRIFT_REFERENCE_INTERVAL_S` of session time have passed since the
+   last one (by elapsed time, not by patch count).
+
+It stops when the best candidate's predicted improvement falls below
+:data:`FLOOR_DE00_PER_MIN` ΔE00 per minute, when the predicted held-out ΔE00
+reaches ``--target-dE00``, or when nothing more fits the budget
+(``--budget-min``; without it, :data:`PAPER_SHARE` of the time the ``paper``
+plan would take on this display, predicted by the same cost model). The stop
+decision adds the validation colours (``--validation N``, default
+:data:`DEFAULT_VALIDATION`: seeded random colours, the ``paper`` plan's first
+N for the same seed, never read by the planner) and a last white; the budget
+keeps their predicted time in reserve throughout.
+
+:func:`plan_state` gives what a view shows of a run in progress (the plan
+growing, the predicted accuracy, the time left); :func:`replay_decisions`
+re-derives every journaled decision from the measurements before it.
+
+Units: seconds of session time (the modelled instrument time for a simulated
+instrument), ΔE00 in CIELAB relative to the measured white, DAC 0..255.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from workbench.errors import InputError
+from workbench.measurement.journal import Journal, added_plan_json
+from workbench.measurement.patch_cost import PatchCostModel, fit_patch_cost
+from workbench.measurement.plans import MeasurementPlan, Patch, measurement_plan_paper
+from workbench.measurement.planning_model import PlanningModel, PlanningRows, planning_colours
+
+__all__ = ["ADAPTIVE_PLAN", "CORE_LEVELS", "CORE_GREYS", "DRIFT_REFERENCE_INTERVAL_S",
+           "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "PAPER_SHARE", "CHECKPOINT_GROWTH",
+           "SWEEP_STEP", "GREY_STEP", "MIXTURE_CUBE", "AdaptiveSettings", "Decision", "PlanState",
+           "AdaptivePlanner", "adaptive_core_plan", "plan_state", "replay_decisions",
+           "validation_patches"]
+
+ADAPTIVE_PLAN = "adaptive"
+"""The plan's name (``measure --plan adaptive``)."""
+
+CORE_LEVELS = (32, 64, 96, 128, 160, 192, 208, 224, 236, 246)
+"""Partial-drive DAC levels of each channel in the core: a few points along each curve, denser
+near full drive, where a power limit or a knee bends a sweep and a patch costs seconds."""
+
+CORE_GREYS = tuple(range(32, 241, 16))
+"""Greys of the core (the ``paper+greys`` ramp less its darkest): the first look at how the
+channels combine below full drive, and the grey axis on which the diagnosis fits an
+interaction's shape and the seed authors' method its tone curves (bright: seconds each)."""
+
+DRIFT_REFERENCE_INTERVAL_S = 120.0
+"""A white is measured once this much session time has passed since the last one."""
+
+FLOOR_DE00_PER_MIN = 0.01
+"""Stop when the best patch would lower the predicted held-out ΔE00 by less than this per minute."""
+
+DEFAULT_VALIDATION = 30
+"""Validation colours by default (fewer than the paper's 50: the score comes with its 95 % CI)."""
+
+PAPER_SHARE = 0.30
+"""Without ``--budget-min``: the budget is this share of the ``paper`` plan's predicted time."""
+
+CHECKPOINT_GROWTH = 1.25
+"""The rows are diagnosed again once the fit rows have grown by this factor."""
+
+SWEEP_STEP = 4
+"""Candidate sweep levels: every this many DAC."""
+GREY_STEP = 8
+"""Candidate greys: every this many DAC."""
+MIXTURE_CUBE = (0, 64, 128, 192, 255)
+"""Per-channel levels of the candidate mixtures (two or three channels lit, not a grey)."""
+
+_WHITE, _BLACK = (255, 255, 255), (0, 0, 0)
+_CHANNELS = ("red", "green", "blue")
+_RAMP_KINDS = ("ramp-r", "ramp-g", "ramp-b")
+
+
+def adaptive_core_plan(seed: int) -> MeasurementPlan:
+    """The core the adaptive plan starts from (module doc); ``seed`` seeds its validation colours."""
+    patches = [Patch("white", _WHITE), Patch("black", _BLACK)]
+    for c, kind in enumerate(_RAMP_KINDS):
+        for level in (255, *CORE_LEVELS):
+            rgb = [0, 0, 0]
+            rgb[c] = level
+            patches.append(Patch(kind, tuple(rgb)))
+    patches += [Patch("grey", (v, v, v)) for v in CORE_GREYS]
+    patches.append(Patch("white", _WHITE))
+    return MeasurementPlan(ADAPTIVE_PLAN, tuple(patches), int(seed))
+
+
+def validation_patches(seed: int, count: int) -> tuple:
+    """The ``count`` validation colours of ``seed``: the ``paper`` plan's first ``count``."""
+    paper = [p for p in measurement_plan_paper(seed).patches if p.kind == "validation"]
+    if count <= len(paper):
+        return tuple(paper[:count])
+    rng = np.random.default_rng(seed)
+    return tuple(Patch("validation", tuple(int(v) for v in rgb))
+                 for rgb in rng.integers(0, 256, size=(count, 3)))
+
+
+@dataclass(frozen=True)
+class AdaptiveSettings:
+    """What the user asked of the adaptive plan (kept in the journal header's settings).
+
+    Attributes
+    ----------
+    seed : int
+        Seeds the validation colours and the planning colours.
+    budget_min : float or None
+        Instrument time the whole session may take, minutes (None: :data:`PAPER_SHARE`
+        of the ``paper`` plan's predicted time).
+    target_dE00 : float or None
+        Stop once the predicted held-out mean ΔE00 is at or below it.
+    validation : int
+        Validation colours measured at the end.
+    floor_dE00_per_min : float
+        The stopping floor of predicted improvement per minute.
+    """
+
+    seed: int
+    budget_min: float | None = None
+    target_dE00: float | None = None
+    validation: int = DEFAULT_VALIDATION
+    floor_dE00_per_min: float = FLOOR_DE00_PER_MIN
+
+    def __post_init__(self):
+        if self.budget_min is not None and not self.budget_min > 0:
+            raise InputError(f"--budget-min {self.budget_min}: give the instrument time in minutes, "
+                             "more than 0")
+        if self.target_dE00 is not None and not self.target_dE00 > 0:
+            raise InputError(f"--target-dE00 {self.target_dE00}: give a mean ΔE00 above 0")
+        if self.validation < 1:
+            raise InputError(f"--validation {self.validation}: give at least 1 validation colour "
+                             "(the score's confidence interval widens as they get fewer)")
+
+    def to_json(self) -> dict:
+        return {"seed": self.seed, "budget_min": self.budget_min, "target_dE00": self.target_dE00,
+                "validation": self.validation, "floor_dE00_per_min": self.floor_dE00_per_min}
+
+    @classmethod
+    def from_json(cls, data: dict) -> "AdaptiveSettings":
+        return cls(seed=int(data["seed"]), budget_min=data.get("budget_min"),
+                   target_dE00=data.get("target_dE00"),
+                   validation=int(data.get("validation", DEFAULT_VALIDATION)),
+                   floor_dE00_per_min=float(data.get("floor_dE00_per_min", FLOOR_DE00_PER_MIN)))
+
+
+@dataclass(frozen=True)
+class Decision:
+    """One choice of the adaptive plan.
+
+    Attributes
+    ----------
+    number : int
+        1 for the first decision.
+    action : str
+        ``"measure"``, ``"drift-reference"`` or ``"stop"``.
+    patches : tuple of Patch
+        What it adds to the plan (the stop: the validation colours and a last white).
+    reason : str
+        Why, in words (the journal's and the GUI's).
+    predicted_dE00 : float
+        Predicted held-out mean ΔE00 before it.
+    predicted_after_dE00 : float or None
+        … after its patch (``"measure"`` only).
+    cost_s : float
+        Predicted seconds of its patches.
+    elapsed_s : float
+        Instrument seconds measured before it.
+    budget_s : float
+        The session's budget, seconds.
+    measured_before : int
+        Measurement records in the journal before it (replays start there).
+    findings : tuple of str
+        The latest checkpoint diagnosis's findings.
+    """
+
+    number: int
+    action: str
+    patches: tuple
+    reason: str
+    predicted_dE00: float
+    predicted_after_dE00: float | None
+    cost_s: float
+    elapsed_s: float
+    budget_s: float
+    measured_before: int
+    findings: tuple = ()
+
+    def to_json(self) -> dict:
+        def rounded(value):
+            return None if value is None else round(float(value), 6)
+
+        return {"number": self.number, "action": self.action,
+                "patches": added_plan_json(MeasurementPlan("", tuple(self.patches)))["patches"],
+                "reason": self.reason, "predicted_dE00": rounded(self.predicted_dE00),
+                "predicted_after_dE00": rounded(self.predicted_after_dE00),
+                "cost_s": rounded(self.cost_s), "elapsed_s": rounded(self.elapsed_s),
+                "budget_s": rounded(self.budget_s), "measured_before": self.measured_before,
+                "findings": list(self.findings)}
+
+
+@dataclass(frozen=True)
+class PlanState:
+    """What a view shows of an adaptive run (:func:`plan_state`).
+
+    Attributes
+    ----------
+    decisions : tuple of dict
+        Every decision record so far (journal order).
+    planned : int
+        Patches in the plan so far (the core and every decision's).
+    measured : int
+        Successful measurements.
+    predicted_dE00 : float or None
+        The latest decision's predicted held-out mean ΔE00.
+    elapsed_s, budget_s : float
+        Instrument seconds measured, and the budget.
+    stopped : bool
+        Whether the stop decision was taken (the validation colours are then measured).
+    """
+
+    decisions: tuple
+    planned: int
+    measured: int
+    predicted_dE00: float | None
+    elapsed_s: float
+    budget_s: float | None
+    stopped: bool
+
+    @property
+    def time_left_s(self) -> float | None:
+        return None if self.budget_s is None else max(self.budget_s - self.elapsed_s, 0.0)
+
+    @property
+    def history(self) -> tuple:
+        """(elapsed_s, predicted_dE00) of each decision: the predicted accuracy as the plan grew."""
+        return tuple((d["elapsed_s"], d["predicted_dE00"]) for d in self.decisions
+                     if d.get("predicted_dE00") is not None)
+
+
+def plan_state(journal: Journal) -> PlanState:
+    """The state of the adaptive run journaled in ``journal`` (for a progress view)."""
+    decisions = tuple(journal.decisions)
+    last = decisions[-1] if decisions else {}
+    return PlanState(decisions=decisions, planned=len(journal.header.plan),
+                     measured=len(journal.ok_records()),
+                     predicted_dE00=last.get("predicted_dE00"),
+                     elapsed_s=_elapsed_s(journal.records),
+                     budget_s=last.get("budget_s"),
+                     stopped=any(d.get("action") == "stop" for d in decisions))
+
+
+def _elapsed_s(records) -> float:
+    """Instrument seconds the records took (failed attempts included; pauses not)."""
+    return float(sum(r.duration_s for r in records))
+
+
+def _drift_divided(rows) -> np.ndarray:
+    """XYZ of ``rows`` (records) divided by the whites' drift, linear in time between them, in
+    the state of the last two whites."""
+    XYZ = np.array([r.XYZ for r in rows], dtype=float)
+    t = np.array([r.t_s for r in rows], dtype=float)
+    white = np.array([all(v >= 255 for v in r.rgb) for r in rows])
+    if white.sum() < 2:
+        return XYZ
+    order = np.argsort(t[white], kind="stable")
+    tw, Yw = t[white][order], XYZ[white, 1][order]
+    reference = Yw[-2:].mean()
+    gain = np.interp(t, tw, Yw / reference)
+    return XYZ / gain[:, None]
+
+
+def _describe_levels(levels) -> str:
+    return ", ".join(str(v) for v in levels)
+
+
+class AdaptivePlanner:
+    """Decides the adaptive plan's next patches from the journal (module doc).
+
+    Parameters
+    ----------
+    settings : AdaptiveSettings
+    diagnose : bool
+        Diagnose at checkpoints and take the follow-up's patches as candidates
+        (True; a test of the planner alone may switch it off).
+    """
+
+    def __init__(self, settings: AdaptiveSettings, diagnose: bool = True):
+        self.settings = settings
+        self.use_diagnosis = diagnose
+        self._checkpoints: dict = {}  # fit rows at the checkpoint → (follow-up patches, findings, why)
+        self.planning_rgb = planning_colours(settings.seed)
+        self.validation = validation_patches(settings.seed, settings.validation)
+
+    # -- what the journal holds -------------------------------------------------------------------
+    @staticmethod
+    def fit_records(journal: Journal) -> list:
+        """The successful fit rows (never validation), full field, in the order they were measured."""
+        latest = journal.latest()
+        return sorted((r for r in latest.values()
+                       if r.ok and r.kind != "validation" and r.window >= 1.0),
+                      key=lambda r: (r.t_s, r.index))
+
+    def decide(self, journal: Journal) -> Decision | None:
+        """The next decision after what ``journal`` holds; None once the stop was decided."""
+        decisions = tuple(journal.decisions)
+        if any(d.get("action") == "stop" for d in decisions):
+            return None
+        number = len(decisions) + 1
+        measured_before = len(journal.records)
+        records = self.fit_records(journal)
+        elapsed = _elapsed_s(journal.records)
+        cost = fit_patch_cost(records)
+        model, noise = self._model(records)
+        findings, follow_up = self._checkpoint(records)
+        before = model.predicted_error()
+
+        def seconds(patches) -> float:
+            if not patches:
+                return 0.0
+            rgb = np.array([p.rgb for p in patches], dtype=float)
+            return float(cost.seconds(np.maximum(model.predict(rgb)[:, 1], 0.0)).sum())
+
+        reserve = seconds(list(self.validation) + [Patch("white", _WHITE)])
+        budget = self._budget_s(decisions, seconds)
+        common = dict(number=number, predicted_dE00=before, elapsed_s=elapsed, budget_s=budget,
+                      measured_before=measured_before, findings=findings)
+
+        def stop(why: str) -> Decision:
+            patches = tuple(self.validation) + (Patch("white", _WHITE),)
+            return Decision(action="stop", patches=patches, predicted_after_dE00=None,
+                            cost_s=seconds(patches),
+                            reason=(f"stop: {why}; predicted held-out ΔE00 {before:.3f}. Now the "
+                                    f"{len(self.validation)} validation colours (seeded, never used "
+                                    "to fit or to choose) and a last white"), **common)
+
+        target = self.settings.target_dE00
+        if target is not None and before <= target:
+            return stop(f"the predicted held-out ΔE00 reached the target {target:g}")
+        white_cost = seconds([Patch("white", _WHITE)])
+        since_white = self._since_white_s(journal)
+        if since_white >= DRIFT_REFERENCE_INTERVAL_S and elapsed + white_cost + reserve <= budget:
+            return Decision(action="drift-reference", patches=(Patch("white", _WHITE),),
+                            predicted_after_dE00=None, cost_s=white_cost,
+                            reason=(f"drift reference: {since_white:.0f} s of session time since "
+                                    f"the last white (one every {DRIFT_REFERENCE_INTERVAL_S:.0f} s)"),
+                            **common)
+        candidates = self._candidates(records, model, follow_up)
+        if not candidates:
+            return stop("no candidate patch is left to measure")
+        patches = [c[0] for c in candidates]
+        costs = np.array([seconds([p]) for p in patches])
+        after = self._after(model, candidates)
+        gain = before - after
+        fits = elapsed + costs + reserve <= budget
+        if not fits.any():
+            return stop(f"the budget of {budget / 60:.1f} min is reached ({elapsed / 60:.1f} min "
+                        f"measured; the validation colours and a last white need "
+                        f"{reserve / 60:.1f} min)")
+        rate = np.where(fits, gain / np.maximum(costs, 1e-3), -np.inf)
+        best = int(np.argmax(rate))  # ties: the first candidate (a fixed order)
+        per_minute = 60.0 * rate[best]
+        if not per_minute >= self.settings.floor_dE00_per_min:
+            return stop(f"the best patch ({patches[best].describe()}) would lower the predicted "
+                        f"held-out ΔE00 by {max(per_minute, 0.0):.4f} per minute, below the floor "
+                        f"of {self.settings.floor_dE00_per_min:g} per minute")
+        reason = (f"{self._what(candidates[best], records, model)}: predicted held-out ΔE00 "
+                  f"{before:.3f} → {after[best]:.3f} for {costs[best]:.0f} s")
+        return Decision(action="measure", patches=(patches[best],), predicted_after_dE00=float(after[best]),
+                        cost_s=float(costs[best]), reason=reason, **common)
+
+    # -- the pieces ------------------------------------------------------------------------------------
+    def _model(self, records):
+        from workbench.diagnostics.noise import estimate_noise
+
+        session = self._session(records)
+        noise = estimate_noise(session)
+        rows = PlanningRows(rgb=np.array([r.rgb for r in records], dtype=float),
+                            XYZ=_drift_divided(records),
+                            kind=np.array([r.kind for r in records], dtype=object))
+        return PlanningModel(rows, noise.relative_sd_Y, noise.gain_sd, self.planning_rgb), noise
+
+    @staticmethod
+    def _session(records):
+        from workbench.session import Session
+
+        return Session(kind=np.array([r.kind for r in records], dtype=object),
+                       rgb=np.array([r.rgb for r in records], dtype=float),
+                       XYZ=np.array([r.XYZ for r in records], dtype=float),
+                       t_s=np.array([r.t_s for r in records], dtype=float),
+                       source="adaptive plan (fit rows so far)", metadata={"plan": ADAPTIVE_PLAN})
+
+    def _checkpoint(self, records) -> tuple:
+        """(findings, follow-up patches) of the diagnosis at the latest checkpoint."""
+        if not self.use_diagnosis:
+            return (), ()
+        n = len(records)
+        checkpoint = self._checkpoint_size(n)
+        if checkpoint not in self._checkpoints:
+            self._checkpoints[checkpoint] = self._diagnose(records[:checkpoint])
+        return self._checkpoints[checkpoint]
+
+    def _checkpoint_size(self, n: int) -> int:
+        """The fit-row count of the latest checkpoint at ``n`` fit rows: the core's count, then
+        each time the rows have grown by CHECKPOINT_GROWTH (a function of ``n`` alone)."""
+        size = len(adaptive_core_plan(0))  # the core's fit rows
+        while size * CHECKPOINT_GROWTH <= n:
+            size = int(np.ceil(size * CHECKPOINT_GROWTH))
+        return min(size, n)
+
+    def _diagnose(self, records) -> tuple:
+        from workbench.diagnostics import diagnose
+        from workbench.diagnostics.follow_up import propose_follow_up
+
+        try:
+            diagnosis = diagnose(self._session(records))
+            follow_up = propose_follow_up(diagnosis)
+        except (InputError, ValueError, np.linalg.LinAlgError):
+            return (), ()
+        findings = tuple(f.effect for f in diagnosis.findings)
+        patches = tuple(p for p in follow_up.patches if p.kind in ("grey", "mixture"))
+        return findings, tuple((p, ", ".join(follow_up.serves)) for p in patches)
+
+    def _budget_s(self, decisions, seconds) -> float:
+        if self.settings.budget_min is not None:
+            return 60.0 * float(self.settings.budget_min)
+        if decisions and decisions[0].get("budget_s") is not None:
+            return float(decisions[0]["budget_s"])
+        return PAPER_SHARE * seconds(list(measurement_plan_paper(self.settings.seed).patches))
+
+    @staticmethod
+    def _since_white_s(journal: Journal) -> float:
+        records = [r for r in journal.records if r.ok]
+        if not records:
+            return 0.0
+        end = max(r.t_s + r.duration_s for r in records)
+        whites = [r.t_s for r in records if r.kind == "white" and all(v >= 255 for v in r.rgb)]
+        return end - (max(whites) if whites else 0.0)
+
+    def _candidates(self, records, model: PlanningModel, follow_up) -> list:
+        """(patch, kind of candidate, detail) in a fixed order: sweeps, greys, mixtures, the
+        follow-up's, primaries."""
+        measured = {tuple(r.rgb) for r in records}
+        out = []
+        for c, kind in enumerate(_RAMP_KINDS):
+            for level in range(SWEEP_STEP, 255, SWEEP_STEP):
+                rgb = [0, 0, 0]
+                rgb[c] = level
+                if tuple(rgb) not in measured:
+                    out.append((Patch(kind, tuple(rgb)), "sweep", c))
+        for level in range(GREY_STEP, 255, GREY_STEP):
+            if (level,) * 3 not in measured:
+                out.append((Patch("grey", (level,) * 3), "mix", ""))
+        seen = {p.rgb for p, _, _ in out}
+        for r in MIXTURE_CUBE:
+            for g in MIXTURE_CUBE:
+                for b in MIXTURE_CUBE:
+                    rgb = (r, g, b)
+                    if sum(v > 0 for v in rgb) < 2 or r == g == b or rgb in measured:
+                        continue
+                    out.append((Patch("mixture", rgb), "mix", ""))
+                    seen.add(rgb)
+        for patch, serves in follow_up:
+            if patch.rgb in measured:
+                continue
+            if patch.rgb in seen:  # already a candidate: say that the diagnosis asks for it too
+                out = [(p, k, serves if p.rgb == patch.rgb else d) for p, k, d in out]
+            else:
+                out.append((patch, "mix", serves))
+                seen.add(patch.rgb)
+        for c, kind in enumerate(_RAMP_KINDS):
+            rgb = [0, 0, 0]
+            rgb[c] = 255
+            out.append((Patch(kind, tuple(rgb)), "primary", c))
+        return out
+
+    @staticmethod
+    def _after(model: PlanningModel, candidates) -> np.ndarray:
+        after = np.zeros(len(candidates))
+        for c in range(3):
+            index = [i for i, (_, k, d) in enumerate(candidates) if k == "sweep" and d == c]
+            if index:
+                levels = [candidates[i][0].rgb[c] for i in index]
+                after[index] = model.after_sweep_levels(c, levels)
+        index = [i for i, (_, k, _) in enumerate(candidates) if k == "mix"]
+        if index:
+            after[index] = model.after_mixtures([candidates[i][0].rgb for i in index])
+        for i, (_, k, d) in enumerate(candidates):
+            if k == "primary":
+                after[i] = model.after_primary(d)
+        return after
+
+    @staticmethod
+    def _what(candidate, records, model: PlanningModel) -> str:
+        patch, kind, detail = candidate
+        if kind == "sweep":
+            c = detail
+            level = patch.rgb[c]
+            levels = sorted({r.rgb[c] for r in records
+                             if r.rgb[c] > 0 and sum(v > 0 for v in r.rgb) == 1} | {0, 255})
+            below = max(v for v in levels if v < level)
+            above = min(v for v in levels if v > level)
+            return (f"{_CHANNELS[c]} tone curve between DAC {below} and {above} (at {level})")
+        if kind == "primary":
+            count = int(model.primary_count[detail])
+            return (f"{_CHANNELS[detail]} at full drive once more (measured {count}×: its noise "
+                    "reaches every colour with that channel)")
+        departure = 100 * model.largest_departure()
+        where = (f"along the grey axis at DAC {patch.rgb[0]}" if patch.kind == "grey"
+                 else f"at the partial-drive mixture {patch.rgb}")
+        asked = f"; the diagnosis's follow-up asks for it ({detail})" if detail else ""
+        return (f"how the channels combine {where} (the greys, mixtures and whites so far depart "
+                f"from R+G+B by up to {departure:.1f} %{asked})")
+
+
+def replay_decisions(journal: Journal, planner: AdaptivePlanner | None = None) -> list:
+    """Re-derive each journaled decision from the measurements before it.
+
+    Returns ``(journaled, replayed)`` pairs of decision JSON; a resumed run
+    (or a reviewer) checks that they agree. The planner is built from the
+    journal header's ``settings["adaptive"]`` unless given.
+    """
+    if planner is None:
+        planner = AdaptivePlanner(AdaptiveSettings.from_json(journal.header.settings["adaptive"]))
+    core = len(journal.header.plan) - sum(len(d.get("patches", ())) for d in journal.decisions)
+    pairs = []
+    for k, journaled in enumerate(journal.decisions):
+        before = journal.records[:int(journaled["measured_before"])]
+        grown = core + sum(len(d.get("patches", ())) for d in journal.decisions[:k])
+        header = replace(journal.header, plan=MeasurementPlan(
+            journal.header.plan.name, journal.header.plan.patches[:grown], journal.header.plan.seed))
+        prefix = Journal(journal.path, header, tuple(before), decisions=tuple(journal.decisions[:k]))
+        replayed = planner.decide(prefix)
+        pairs.append((journaled, None if replayed is None else {"record": "decision",
+                                                               **replayed.to_json()}))
+    return pairs
