@@ -23,6 +23,7 @@ from workbench.export.level2_files import Level2Light
 from workbench.hyperspectral import relight_level2_full_band
 from workbench.illuminants import get_illuminant
 
+HLSL = "unity/Runtime/Shaders/Level2Relight.hlsl"   # in the Unity package (runtime/unity/)
 CONSUMER_IMPORTS = {"argparse", "json", "struct", "sys", "zlib", "pathlib", "numpy"}
 
 # Run the consumer with the workbench (and the profiles package) made unimportable.
@@ -185,15 +186,15 @@ def _compile_hlsl(source: Path, spirv: Path, entry: str = "main", stage: str = "
 @pytest.mark.parametrize("entry, stage", [("main", "frag"), ("VrFullScreenTriangle", "vert")])
 def test_hlsl_shader_compiles_to_valid_spirv(tmp_path, entry, stage):
     spirv = tmp_path / f"relight-{stage}.spv"
-    _compile_hlsl(runtime_file("Level2Relight.hlsl"), spirv, entry, stage)
+    _compile_hlsl(runtime_file(HLSL), spirv, entry, stage)
     need_tool("spirv-val")
     result = subprocess.run(["spirv-val", str(spirv)], capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stdout + result.stderr
 
 
 def test_unity_shader_wraps_the_hlsl_entry_points():
-    text = runtime_file("VrLevel2Relight.shader").read_text()
-    hlsl = runtime_file("Level2Relight.hlsl").read_text()
+    text = runtime_file("unity/Runtime/Shaders/VrLevel2Relight.shader").read_text()
+    hlsl = runtime_file(HLSL).read_text()
     assert '#include "Level2Relight.hlsl"' in text
     for pragma, entry in (("vertex", "VrFullScreenTriangle"), ("fragment", "main")):
         assert f"#pragma {pragma} {entry}" in text
@@ -202,13 +203,13 @@ def test_unity_shader_wraps_the_hlsl_entry_points():
 
 def test_a_wrong_entry_point_is_caught_although_the_compiler_exits_0(tmp_path):
     with pytest.raises(AssertionError, match="Entry point not found"):
-        _compile_hlsl(runtime_file("Level2Relight.hlsl"), tmp_path / "x.spv", entry="PSMain")
+        _compile_hlsl(runtime_file(HLSL), tmp_path / "x.spv", entry="PSMain")
 
 
 def test_hlsl_shader_executed_through_spirv_cross(simulated_bundle, tmp_path):
     bundle, _ = simulated_bundle
     spirv = tmp_path / "relight.spv"
-    _compile_hlsl(bundle / "runtime" / "Level2Relight.hlsl", spirv)
+    _compile_hlsl(bundle / "runtime" / HLSL, spirv)
     need_tool("spirv-cross")
     glsl = tmp_path / "relight_from_hlsl.frag"
     glsl.write_text(subprocess.run(["spirv-cross", str(spirv), "--version", "430", "--no-es"],
@@ -229,7 +230,8 @@ def test_unity_loader_compiles_against_a_unityengine_stub(tmp_path):
                    check=True, capture_output=True, text=True, timeout=120)
     result = subprocess.run([mcs, "-langversion:7.2", "-target:library", "-warnaserror+",
                              f"-r:{engine}", f"-out:{tmp_path / 'VrColourBundle.dll'}",
-                             str(runtime_file("VrColourBundle.cs"))],
+                             *(str(runtime_file(f"unity/Runtime/{name}"))   # the loader and its CPU halves
+                               for name in ("VrColourBundle.cs", "VrCubeLut.cs", "VrLevel2Cpu.cs"))],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stdout + result.stderr
     assert (tmp_path / "VrColourBundle.dll").stat().st_size > 0

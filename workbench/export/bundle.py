@@ -12,8 +12,11 @@ whole, so a reader never sees half a bundle):
                                 plus ``display_drive_correction.bin`` where the model needs it
 ``lights.json``                 the level-1 light table (:mod:`.lights_table`)
 ``level2/<cube>/``              coefficients, basis, per-light matrices and tables (:mod:`.level2_files`)
-``runtime/``                    ``reference_consumer.py`` (numpy + json only), the Unity C# loader,
-                                the HLSL and GLSL shaders
+``runtime/``                    ``reference_consumer.py`` (numpy + json only) and the GLSL shaders
+``runtime/unity/``              the Unity package (Package Manager layout: ``package.json``,
+                                ``Runtime/`` with the C# loader, its components and the HLSL
+                                shaders, ``Samples~/Lightbooth``), copied whole so that Unity's
+                                "Add package from disk" works on the bundle as written
 ``README.md``                   how a runtime uses each file, and the three lines that load it in Unity
 ==============================  ==============================================================
 """
@@ -63,27 +66,54 @@ __all__ = [
     "BUNDLE_FORMAT",
     "BUNDLE_FORMAT_VERSION",
     "RUNTIME_FILES",
+    "UNITY_PACKAGE",
     "BundleSummary",
     "write_bundle",
     "runtime_file",
+    "unity_package_files",
 ]
 
 BUNDLE_FORMAT = "vr-colour-workbench-bundle"
 BUNDLE_FORMAT_VERSION = 1
 
-RUNTIME_FILES = ("reference_consumer.py", "VrColourBundle.cs", "Level2Relight.hlsl", "VrLevel2Relight.shader",
-                 "level2_relight.frag", "level2_relight.vert")
+RUNTIME_FILES = ("reference_consumer.py", "level2_relight.frag", "level2_relight.vert")
 """Files of ``workbench/export/runtime/`` copied into every bundle's ``runtime/``."""
+
+UNITY_PACKAGE = "unity"
+"""Folder of ``workbench/export/runtime/`` holding the Unity package, copied whole into every
+bundle as ``runtime/unity/`` (:func:`unity_package_files`)."""
+
+_NOT_PACKAGE = shutil.ignore_patterns("__pycache__", "*.pyc", ".DS_Store")
 
 _NAME = re.compile(r"[^A-Za-z0-9_-]+")
 
 
 def runtime_file(name: str) -> Path:
-    """Path of a shipped runtime file (package data of ``workbench.export``)."""
-    path = Path(str(resources.files("workbench.export").joinpath("runtime", name)))
+    """Path of a shipped runtime file (package data of ``workbench.export``).
+
+    ``name`` is relative to ``workbench/export/runtime/``, ``/``-separated: e.g.
+    ``"reference_consumer.py"`` or ``"unity/Runtime/VrColourBundle.cs"``.
+    """
+    path = Path(str(resources.files("workbench.export").joinpath("runtime", *name.split("/"))))
     if not path.is_file():
         raise FileNotFoundError(f"runtime file {name!r} is missing from the installation")
     return path
+
+
+def _unity_package() -> Path:
+    path = Path(str(resources.files("workbench.export").joinpath("runtime", UNITY_PACKAGE)))
+    if not (path / "package.json").is_file():
+        raise FileNotFoundError("the Unity package (runtime/unity/package.json) is missing from "
+                                "the installation")
+    return path
+
+
+def unity_package_files() -> tuple[str, ...]:
+    """The Unity package's files, ``/``-separated and relative to the package folder, sorted."""
+    root = _unity_package()
+    return tuple(sorted(path.relative_to(root).as_posix() for path in root.rglob("*")
+                        if path.is_file() and "__pycache__" not in path.parts
+                        and path.suffix != ".pyc" and path.name != ".DS_Store"))
 
 
 @dataclass(frozen=True)
@@ -309,6 +339,8 @@ def write_bundle(profile: Profile, directory, *, light_ids: Sequence[str] | None
         (staging / "runtime").mkdir()
         for name in RUNTIME_FILES:
             shutil.copyfile(runtime_file(name), staging / "runtime" / name)
+        shutil.copytree(_unity_package(), staging / "runtime" / UNITY_PACKAGE,
+                        ignore=_NOT_PACKAGE, copy_function=shutil.copyfile)
         manifest = {"format": BUNDLE_FORMAT, "format_version": BUNDLE_FORMAT_VERSION,
                     "profile": "profile.vrprofile.json",
                     "profile_format_version": PROFILE_FORMAT_VERSION,

@@ -1,16 +1,20 @@
-// Unity loader of a VR colour workbench runtime bundle (C# 7.2; Unity 2020.1 or newer).
+// Unity loader of a VR colour workbench runtime bundle (C# 7.2; Unity 2021.3 or newer).
 //
 //   var bundle = VrColourBundle.Load(Path.Combine(Application.streamingAssetsPath, "headset"));
 //   sceneLight.color = bundle.LightColour("cie-d65");                       // level 1
-//   albedo = bundle.Relight(relightMaterial, "paintings", "cie-d65", albedo); // level 2
+//   albedo = bundle.Relight(relightMaterial, "paintings", "cie-d65", albedo); // level 2, GPU
+//   albedo = bundle.RelightCpu("paintings", "cie-d65", albedo);               // level 2, CPU
 //
 // relightMaterial uses the shader "Hidden/VrColourWorkbench/Level2Relight"
-// (VrLevel2Relight.shader + Level2Relight.hlsl); the returned Texture2D is
-// sRGB (linear: false) and goes in the albedo slot of the object's material.
+// (Shaders/VrLevel2Relight.shader + Shaders/Level2Relight.hlsl); the returned
+// Texture2D is sRGB (linear: false) and goes in the albedo slot of the object's
+// material. The components VrBundleLight, VrLevel2Material and VrDisplayInverse
+// do this from the inspector.
 //
 // Builds the Texture2DArray of a cube's coefficients (RGBAHalf), the display
 // inverse .cube as a Texture3D (RGBAFloat, bilinear = trilinear in 3D) for a
-// colour-grading step, and the level-2 tables. Reads only data, never code.
+// colour-grading step, and the level-2 tables; keeps the same data on the CPU
+// for RelightCpu (VrLevel2Cpu) and VrCubeLut. Reads only data, never code.
 using System;
 using System.Collections.Generic;
 using System.Globalization;
@@ -47,10 +51,41 @@ namespace VrColourWorkbench
         public Texture3D DriveCorrection { get; private set; }
         public Vector4 CorrectionDomain { get; private set; }
         public int CorrectionSize { get; private set; }
+        /// <summary>The display inverse as read, for the CPU path: 3 x 255 thresholds, 3 rows of cells, the correction table (r fastest rgb, or null).</summary>
+        public float[] InverseThresholds { get; private set; }
+        public float[] InverseCells { get; private set; }
+        public float[] CorrectionTable { get; private set; }
         readonly Dictionary<string, Texture2DArray> coefficients = new Dictionary<string, Texture2DArray>();
         readonly Dictionary<string, Texture2D> texelTables = new Dictionary<string, Texture2D>();
+        readonly Dictionary<string, float[]> channels = new Dictionary<string, float[]>();
+        readonly Dictionary<string, Level2Lights> level2Lights = new Dictionary<string, Level2Lights>();
+        VrCubeLut displayInverseLut;
+        static readonly Dictionary<string, VrColourBundle> shared = new Dictionary<string, VrColourBundle>();
 
         VrColourBundle() { }
+
+        /// <summary>A folder relative to StreamingAssets (or an absolute one) as a path.</summary>
+        public static string ResolveFolder(string folder)
+        {
+            if (string.IsNullOrEmpty(folder)) throw new BundleException("no bundle folder given: name a folder under StreamingAssets");
+            return Path.IsPathRooted(folder) ? folder : Path.Combine(Application.streamingAssetsPath, folder);
+        }
+
+        /// <summary>The bundle of a folder (see ResolveFolder), loaded once and shared by every component that names it.</summary>
+        public static VrColourBundle Shared(string folder)
+        {
+            string directory = ResolveFolder(folder);
+            VrColourBundle bundle;
+            if (!shared.TryGetValue(directory, out bundle))
+            {
+                bundle = Load(directory);
+                shared[directory] = bundle;
+            }
+            return bundle;
+        }
+
+        /// <summary>Forgets the shared bundles (after a new export into the same folder).</summary>
+        public static void ForgetShared() { shared.Clear(); }
 
         public static VrColourBundle Load(string directory)
         {
@@ -66,9 +101,11 @@ namespace VrColourWorkbench
             if (inverse.thresholds == null || inverse.thresholds.Length != 3 * 255)
                 throw new BundleException(directory + ": display_inverse.json needs 765 thresholds");
             bundle.Thresholds = FloatTable(inverse.thresholds, 255);
+            bundle.InverseThresholds = inverse.thresholds;
             if (inverse.cells == null || inverse.cells.Length % 3 != 0 || inverse.cells.Length == 0)
                 throw new BundleException(directory + ": display_inverse.json needs 3 rows of cells");
             bundle.Cells = FloatTable(inverse.cells, inverse.cells.Length / 3);
+            bundle.InverseCells = inverse.cells;
             bundle.CorrectionSize = inverse.correction == null ? 0 : inverse.correction.size;
             if (bundle.CorrectionSize > 0)
             {
@@ -77,9 +114,11 @@ namespace VrColourWorkbench
                     throw new BundleException(directory + ": display_inverse.json correction needs a size of 2..257 and a domain of 2 numbers");
                 byte[] raw = ReadBytes(directory, inverse.correction.file, n * n * n * 3 * 4);
                 var colours = new Color[n * n * n];
+                var table = new float[3 * n * n * n];
+                for (int i = 0; i < table.Length; ++i) table[i] = ReadSingle(raw, 4 * i);
                 for (int i = 0; i < colours.Length; ++i)
-                    colours[i] = new Color(ReadSingle(raw, 12 * i), ReadSingle(raw, 12 * i + 4),
-                                           ReadSingle(raw, 12 * i + 8), 1f);
+                    colours[i] = new Color(table[3 * i], table[3 * i + 1], table[3 * i + 2], 1f);
+                bundle.CorrectionTable = table;
                 var texture = new Texture3D(n, n, n, TextureFormat.RGBAFloat, false);
                 texture.filterMode = FilterMode.Point;
                 texture.wrapMode = TextureWrapMode.Clamp;
@@ -94,15 +133,52 @@ namespace VrColourWorkbench
         /// <summary>Level 1: the engine light colour (sRGB-encoded, as Light.color takes it).</summary>
         public Color LightColour(string id)
         {
-            foreach (var light in Lights.lights)
-                if (light.id == id)
-                    return new Color32((byte)light.rgb8[0], (byte)light.rgb8[1], (byte)light.rgb8[2], 255);
+            LightEntry light = FindLight(id);
+            return new Color32((byte)light.rgb8[0], (byte)light.rgb8[1], (byte)light.rgb8[2], 255);
+        }
+
+        /// <summary>Level 1: the lights.json record of a source (rgb8, linear, XYZ of the white diffuser, ...).</summary>
+        public LightEntry FindLight(string id)
+        {
+            if (Lights.lights != null)
+                foreach (var light in Lights.lights)
+                    if (light.id == id)
+                    {
+                        if (light.rgb8 == null || light.rgb8.Length != 3 || light.XYZ == null || light.XYZ.Length != 3)
+                            throw new BundleException("lights.json: light '" + id + "' needs rgb8 and XYZ of 3 numbers");
+                        foreach (int value in light.rgb8)
+                            if (value < 0 || value > 255) throw new BundleException("lights.json: light '" + id + "' has rgb8 outside 0..255");
+                        return light;
+                    }
             throw new BundleException("no light '" + id + "' in the bundle");
+        }
+
+        /// <summary>The source ids of lights.json, in the bundle's order.</summary>
+        public string[] LightIds()
+        {
+            var ids = new string[Lights.lights == null ? 0 : Lights.lights.Length];
+            for (int i = 0; i < ids.Length; ++i) ids[i] = Lights.lights[i].id;
+            return ids;
+        }
+
+        /// <summary>The names of the bundle's level-2 cubes.</summary>
+        public string[] CubeNames()
+        {
+            var names = new string[Manifest.cubes == null ? 0 : Manifest.cubes.Length];
+            for (int i = 0; i < names.Length; ++i) names[i] = Manifest.cubes[i].name;
+            return names;
         }
 
         /// <summary>The display inverse .cube (engine sRGB output to HMD DAC/255) as a Texture3D.</summary>
         public Texture3D LoadDisplayInverseCube()
         {
+            return LoadDisplayInverseLut().ToTexture3D();
+        }
+
+        /// <summary>The display inverse .cube on the CPU (VrCubeLut: Sample, ApplyToPixels, ToTexture3D); read once.</summary>
+        public VrCubeLut LoadDisplayInverseLut()
+        {
+            if (displayInverseLut != null) return displayInverseLut;
             string path = Path.Combine(Directory, Manifest.display_inverse_cube);
             int size = 0;
             var colours = new List<Color>();
@@ -127,12 +203,8 @@ namespace VrColourWorkbench
             }
             if (size < 2 || colours.Count != size * size * size)
                 throw new BundleException(path + ": not a complete .cube");
-            var texture = new Texture3D(size, size, size, TextureFormat.RGBAFloat, false);
-            texture.filterMode = FilterMode.Bilinear;  // trilinear across the three axes
-            texture.wrapMode = TextureWrapMode.Clamp;
-            texture.SetPixels(colours.ToArray());      // red fastest, as the .cube
-            texture.Apply(false);
-            return texture;
+            displayInverseLut = new VrCubeLut(size, colours.ToArray());
+            return displayInverseLut;
         }
 
         /// <summary>Level 2: the coefficient layers of a cube as a Texture2DArray (RGBAHalf, rows bottom first).</summary>
@@ -165,14 +237,9 @@ namespace VrColourWorkbench
         /// <summary>Sets every input of Level2Relight.hlsl on a material for one cube and one light.</summary>
         public void BindLevel2(Material material, string cube, string lightId)
         {
-            BundleCube entry = FindCube(cube);
-            var table = ReadJson<Level2Lights>(Directory, entry.folder + "/lights.json");
-            Level2Light light = null;
-            foreach (var candidate in table.lights) if (candidate.id == lightId) light = candidate;
-            if (light == null) throw new BundleException(cube + ": no level-2 light '" + lightId + "'");
+            Level2Lights table;
+            Level2Light light = FindLevel2Light(cube, lightId, out table);
             int channels = table.channels;
-            if (light.matrix.Length != 3 * channels || light.texel_table.Length != 768)
-                throw new BundleException(cube + ": malformed level-2 light '" + lightId + "'");
             var rows = new Vector4[3 * MaxLayers];
             for (int layer = 0; layer < table.layers; ++layer)
                 for (int output = 0; output < 3; ++output)
@@ -224,6 +291,91 @@ namespace VrColourWorkbench
             Graphics.CopyTexture(target, albedo);  // the same bytes, now sampled as sRGB
             target.Release();
             return albedo;
+        }
+
+        /// <summary>Level 2 on the CPU: the same arithmetic as Level2Relight.hlsl (VrLevel2Cpu), into an sRGB Texture2D (created if null).</summary>
+        public Texture2D RelightCpu(string cube, string lightId, Texture2D albedo)
+        {
+            int unreachable;
+            return RelightCpu(cube, lightId, albedo, out unreachable);
+        }
+
+        /// <summary>RelightCpu, and how many texels the light cannot carry (alpha 0).</summary>
+        public Texture2D RelightCpu(string cube, string lightId, Texture2D albedo, out int unreachable)
+        {
+            BundleCube entry = FindCube(cube);
+            Color32[] texels = RelightCpuTexels(cube, lightId, out unreachable);
+            if (albedo == null || albedo.width != entry.width || albedo.height != entry.height)
+                albedo = new Texture2D(entry.width, entry.height, TextureFormat.RGBA32, false, false);
+            albedo.filterMode = FilterMode.Point;
+            albedo.wrapMode = TextureWrapMode.Clamp;
+            albedo.SetPixels32(texels);
+            albedo.Apply(false);
+            return albedo;
+        }
+
+        /// <summary>Level 2 on the CPU: the texels (rows bottom first, as Texture2D.SetPixels32 takes them; alpha 0 where the light cannot carry the texel).</summary>
+        public Color32[] RelightCpuTexels(string cube, string lightId, out int unreachable)
+        {
+            Level2Lights table;
+            Level2Light light = FindLevel2Light(cube, lightId, out table);
+            BundleCube entry = FindCube(cube);
+            float[] planes = LoadCoefficientChannels(cube);
+            var inverse = new VrLevel2Cpu.Inverse(InverseThresholds, InverseCells, CorrectionTable, CorrectionSize,
+                                                  CorrectionDomain.x, CorrectionDomain.y);
+            return VrLevel2Cpu.Relight(planes, entry.width, entry.height, table.channels, light, inverse, out unreachable);
+        }
+
+        /// <summary>Level 2 on the CPU: a cube's coefficient channels as floats, [channel][row, bottom first][column].</summary>
+        public float[] LoadCoefficientChannels(string cube)
+        {
+            float[] planes;
+            if (channels.TryGetValue(cube, out planes)) return planes;
+            BundleCube entry = FindCube(cube);
+            var header = ReadJson<CoefficientHeader>(Directory, entry.folder + "/coefficients.json");
+            if (header.layers != (header.channels + 3) / 4 || header.layers > MaxLayers || header.width != entry.width
+                || header.height != entry.height || header.width < 1 || header.height < 1)
+                throw new BundleException(cube + ": inconsistent coefficient header");
+            int texels = header.width * header.height;
+            byte[] raw = ReadBytes(Directory, entry.folder + "/" + header.file, texels * 8 * header.layers);
+            planes = new float[header.channels * texels];
+            for (int layer = 0; layer < header.layers; ++layer)
+                for (int row = 0; row < header.height; ++row)   // the file is top row first; Unity is bottom first
+                    for (int column = 0; column < header.width; ++column)
+                    {
+                        int source = ((layer * header.height + row) * header.width + column) * 8;
+                        int texel = (header.height - 1 - row) * header.width + column;
+                        for (int i = 0; i < 4; ++i)
+                        {
+                            int channel = 4 * layer + i;
+                            if (channel < header.channels)
+                                planes[channel * texels + texel] = VrLevel2Cpu.HalfToSingle((ushort)(raw[source + 2 * i] | (raw[source + 2 * i + 1] << 8)));
+                        }
+                    }
+            channels[cube] = planes;
+            return planes;
+        }
+
+        /// <summary>A level-2 light record of a cube (matrix, offset, texel table, unreachable levels), checked.</summary>
+        public Level2Light FindLevel2Light(string cube, string lightId, out Level2Lights table)
+        {
+            BundleCube entry = FindCube(cube);
+            if (!level2Lights.TryGetValue(cube, out table))
+            {
+                table = ReadJson<Level2Lights>(Directory, entry.folder + "/lights.json");
+                level2Lights[cube] = table;
+            }
+            Level2Light light = null;
+            if (table.lights != null)
+                foreach (var candidate in table.lights) if (candidate.id == lightId) light = candidate;
+            if (light == null) throw new BundleException(cube + ": no level-2 light '" + lightId + "'");
+            if (table.channels < 1 || table.layers != (table.channels + 3) / 4 || table.layers > MaxLayers
+                || light.matrix == null || light.matrix.Length != 3 * table.channels
+                || light.offset == null || light.offset.Length != 3
+                || light.texel_table == null || light.texel_table.Length != 768
+                || light.unreachable_dac == null || light.unreachable_dac.Length != 3)
+                throw new BundleException(cube + ": malformed level-2 light '" + lightId + "'");
+            return light;
         }
 
         BundleCube FindCube(string cube)
