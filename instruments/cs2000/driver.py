@@ -21,7 +21,8 @@ import logging
 import math
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Literal, NoReturn
 
@@ -704,6 +705,30 @@ class CS2000:
             if frequency_hz is not None:
                 raise ValueError(f"sync mode {mode} ({_SYNC_MODES[mode]}) takes no frequency")
             self._query("SCMS", mode)
+
+    @contextmanager
+    def synchronised(self, sync: SyncMode) -> Iterator[SyncMode]:
+        """Put the instrument in ``sync`` for a block (``SCMR``, ``SCMS``); the previous mode is put back.
+
+        Yields the previous mode. Putting it back is best effort: a failure
+        then is logged, not raised (the block's own outcome stands).
+
+        Examples
+        --------
+        >>> with meter.synchronised(SyncMode.parse("internal:90")):  # doctest: +SKIP
+        ...     measurement = meter.measure()  # sent SCMS,1,9000 before
+        """
+        previous = self.sync_mode()
+        self.set_sync_mode(sync.mode, sync.frequency_hz)
+        logger.info("%s: sync %s (was %s)", self._port_name, sync.text, previous.text)
+        try:
+            yield previous
+        finally:
+            if previous != sync:
+                try:
+                    self.set_sync_mode(previous.mode, previous.frequency_hz)
+                except (CS2000Error, ValueError, *_PORT_ERRORS) as err:
+                    logger.error("%s: could not put the sync back to %s: %s", self._port_name, previous.text, err)
 
     def measuring_angle(self) -> float:
         """Read the measuring angle in degrees (``STSR``: 1, 0.2 or 0.1).

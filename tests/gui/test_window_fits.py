@@ -101,7 +101,7 @@ def _right_edge(widget, ancestor) -> int:
     return widget.mapTo(ancestor, widget.rect().topRight()).x()
 
 
-@pytest.mark.parametrize("display", ["simulated", "window", "tcp"])
+@pytest.mark.parametrize("display", ["simulated", "window", "tcp", "rgb-text", "value-shot"])
 @pytest.mark.parametrize("size", SIZES)
 def test_the_calibrate_form_fits_its_column_with_every_text_whole(window, size, display):
     page = window.pages["calibrate"]

@@ -58,13 +58,14 @@ class _Standin:
         self._listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self._listener.bind(("127.0.0.1", port))
         self._listener.listen(8)
+        self._address = self._listener.getsockname()[:2]
         self._listener.settimeout(0.05)
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._serve, daemon=True, name=type(self).__name__)
 
     @property
     def address(self) -> tuple:
-        return self._listener.getsockname()[:2]
+        return self._address
 
     @property
     def showing(self) -> list:
@@ -184,10 +185,15 @@ class UnrealValueShotStandin(_Standin):
             except OSError:
                 return
             if not chunk:
-                if pending:
-                    self._messages(bytes(pending), connection)
-                return
+                break
             pending += chunk
+        try:  # stopped: what the client sent last (DONE:0) is still read
+            while chunk := connection.recv(4096):
+                pending += chunk
+        except OSError:
+            pass
+        if pending:
+            self._messages(bytes(pending), connection)
 
     def _messages(self, data: bytes, connection) -> None:
         """Split what arrived into messages (each starts with ``Value:`` or ``DONE:``) and act on each."""

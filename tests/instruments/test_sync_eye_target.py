@@ -276,3 +276,85 @@ def test_measure_target_needs_enter_on_stdin(tmp_path, monkeypatch, capsys):
 def test_measure_target_on_the_simulation_says_there_is_nothing_to_aim(tmp_path, capsys):
     assert _measure(tmp_path, "--target") == 0
     assert "the simulated headset has nothing to aim at" in capsys.readouterr().err
+
+
+# -- the Calibrate page's setup (no Qt) and form --------------------------------------------
+
+def test_a_calibration_setup_measures_with_its_sync_over_the_unreal_convention(tmp_path, monkeypatch):
+    import workbench.gui.calibration_setup as calibration_setup
+    from tests.instruments.engine_standins import UnrealValueShotStandin
+    from workbench.gui.calibration_setup import CalibrationSetup, open_run
+    from workbench.measurement.runner import RunFinished
+
+    opened = []
+    monkeypatch.setattr(calibration_setup, "open_simulated_instrument",
+                        lambda *a, **k: opened.append(open_simulated_instrument(*a, **k)) or opened[-1])
+    with UnrealValueShotStandin() as engine:
+        setup = CalibrationSetup(tmp_path / "run", display="value-shot", engine_address=engine.address,
+                                 plan_name="file", plan_file=_plan_file(tmp_path), sync="internal:90", seed=2)
+        with open_run(setup) as run:
+            events = list(run.events())
+    assert isinstance(events[-1], RunFinished) and events[-1].summary.measured == 3
+    received = opened[0].emulator.received
+    assert received.index("SCMS,1,9000") < received.index("MEAS,1") and received.count("SCMS,0") == 1
+    assert engine.done  # DONE:0 when the run closed the display
+    header = read_journal(tmp_path / "run" / JOURNAL_NAME).header
+    assert header.sync == "internal:90" and header.eye == "both"
+    assert header.display.startswith("engine via value-shot:127.0.0.1:")
+    assert [rgb for _, rgb in engine.shown] == [[255, 255, 255], [10, 200, 30], [0, 0, 0]]
+    assert setup.describe_display() == f"Unreal project at value-shot:{engine.address[0]}:{engine.address[1]}"
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"display": "rgb-text", "engine_address": ("127.0.0.1", 55001), "eye": "left"},
+     "shows each patch to both eyes"),
+    ({"display": "window", "eye": "right"}, "shows each patch to both eyes"),
+    ({"display": "rgb-text"}, "needs the engine's host and port (e.g. 127.0.0.1:55001)"),
+    ({"sync": "internal:500"}, "internal sync takes 20.00-200.00 Hz"),
+    ({"display": "rgb-text", "engine_address": ("h", 1), "settle_s": 99}, "settle time 99 s must lie in 0..60"),
+])
+def test_a_calibration_setup_refuses_what_its_display_cannot_do(tmp_path, changes, message):
+    from workbench.errors import InputError
+    from workbench.gui.calibration_setup import CalibrationSetup
+
+    with pytest.raises(InputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        CalibrationSetup(tmp_path, **changes)
+
+
+def test_a_calibration_setup_refuses_apl_patches_for_the_authors_conventions(tmp_path):
+    from workbench.errors import InputError
+    from workbench.gui.calibration_setup import CalibrationSetup, open_run
+
+    setup = CalibrationSetup(tmp_path, display="rgb-text", engine_address=("127.0.0.1", 9), plan_name="apl")
+    with pytest.raises(InputError, match="has APL patches"):
+        with open_run(setup):
+            pass
+    assert not (tmp_path / JOURNAL_NAME).exists()
+
+
+def test_the_form_offers_the_sync_the_eye_and_the_engines(qtbot, tmp_path):
+    pytest.importorskip("PySide6")
+    from workbench.gui import measure_window
+
+    if (reason := measure_window.patch_window_unavailable_reason()) is not None:
+        pytest.skip(f"Qt cannot open a window here: {reason}")
+    from workbench.gui.widgets.calibration_form import CalibrationForm
+
+    form = CalibrationForm()
+    qtbot.addWidget(form)
+    form.out_dir.setText(str(tmp_path))
+    form.sync.setCurrentIndex(form.sync.findData("internal"))
+    form.sync_hz.setValue(72.0)
+    form.display.setCurrentIndex(form.display.findData("tcp"))
+    form.eye.setCurrentIndex(form.eye.findData("left"))
+    setup = form.setup()
+    assert (setup.sync, setup.eye, setup.display) == ("internal:72", "left", "tcp")
+    form.display.setCurrentIndex(form.display.findData("rgb-text"))
+    form.settle.setValue(0.5)
+    setup = form.setup()
+    assert (setup.display, setup.engine_address, setup.settle_s, setup.eye) == ("rgb-text", ("127.0.0.1", 55001),
+                                                                                 0.5, "both")
+    form.display.setCurrentIndex(form.display.findData("value-shot"))  # the Unreal project's default port
+    assert form.setup().engine_address == ("127.0.0.1", 8890) and not form.settle.isVisibleTo(form)
+    form.sync.setCurrentIndex(form.sync.findData("none"))
+    assert form.setup().sync == "none" and not form.sync_hz.isEnabled()

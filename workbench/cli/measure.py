@@ -126,6 +126,13 @@ from workbench.measurement.runner import (
     format_duration,
 )
 from workbench.measurement.simulation import open_simulated_instrument
+from workbench.measurement.adaptive import (
+    ADAPTIVE_PLAN,
+    AdaptivePlanner,
+    AdaptiveSettings,
+    adaptive_core_plan,
+    held_out_summary,
+)
 
 __all__ = ["register", "DisplayKind", "DISPLAY_KINDS", "parse_display", "parse_sync"]
 
@@ -167,7 +174,9 @@ def register(subparsers) -> None:
                         help="before the run, show the centring target (rings and a cross on black) and "
                              "wait for Enter while the instrument is aimed at its centre")
     plans = parser.add_mutually_exclusive_group()
-    plans.add_argument("--plan", choices=sorted(MEASUREMENT_PLANS), help="built-in plan (default paper)")
+    plans.add_argument("--plan", choices=sorted(MEASUREMENT_PLANS) + [ADAPTIVE_PLAN],
+                       help="built-in plan (default paper); adaptive: a small core, then each next patch "
+                            "chosen by the held-out error it removes per second of instrument time")
     plans.add_argument("--plan-file", metavar="FILE", help="CSV plan with columns kind,r,g,b (and optionally window,sr,sg,sb)")
     plans.add_argument("--add-plan", metavar="FILE",
                        help="measure this plan file (e.g. diagnose --follow-up's) into the finished session "
@@ -175,6 +184,14 @@ def register(subparsers) -> None:
                             "session.csv and session.ti3 rewritten with every measurement")
     parser.add_argument("--seed", type=int, help="seed of the validation colours and, with --simulate, the "
                                                  "instrument noise (default: a fresh one, kept in the journal)")
+    parser.add_argument("--budget-min", type=float, metavar="M",
+                        help="with --plan adaptive: the instrument time the session may take, minutes "
+                             "(default: 30 %% of what the paper plan would take on this display)")
+    parser.add_argument("--target-dE00", type=float, metavar="T",
+                        help="with --plan adaptive: stop once the predicted held-out mean ΔE00 is at or below T")
+    parser.add_argument("--validation", type=int, metavar="N",
+                        help="with --plan adaptive: validation colours measured at the end (default 30; "
+                             "the held-out score is given with its 95 %% confidence interval)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--resume", action="store_true",
                         help="continue the run journaled in DIR (failed patches are measured again)")
@@ -377,7 +394,34 @@ def _requested_plan(args):
     if args.plan is None and args.seed is None and args.resume:
         return None
     seed = args.seed if args.seed is not None else secrets.randbelow(2**31)
+    if args.plan == ADAPTIVE_PLAN:
+        return adaptive_core_plan(seed)
     return measurement_plan(args.plan or "paper", seed)
+
+
+def _adaptive_settings(args, plan, journal) -> dict | None:
+    """The adaptive plan's settings for the journal header (None for another plan)."""
+    adaptive_options = [o for o, v in (("--budget-min", args.budget_min), ("--target-dE00", args.target_dE00),
+                                       ("--validation", args.validation)) if v is not None]
+    if journal is not None:
+        if adaptive_options:
+            raise InputError(f"{', '.join(adaptive_options)} cannot change a session already begun: "
+                             "resume without them (the journal keeps the first run's)")
+        return None
+    if plan is None or plan.name != ADAPTIVE_PLAN:
+        if adaptive_options:
+            raise InputError(f"{', '.join(adaptive_options)} apply to --plan adaptive only")
+        return None
+    options = {"budget_min": args.budget_min, "target_dE00": args.target_dE00}
+    if args.validation is not None:
+        options["validation"] = args.validation
+    return AdaptiveSettings(seed=plan.seed, **options).to_json()
+
+
+def _planner(settings: dict):
+    """The adaptive plan's planner where the session's settings hold one, else None."""
+    data = settings.get("adaptive")
+    return None if data is None else AdaptivePlanner(AdaptiveSettings.from_json(data))
 
 
 def _run(args) -> int:
@@ -398,8 +442,14 @@ def _run(args) -> int:
     else:
         plan = _requested_plan(args)
         journal = read_journal(f"{args.out}/{JOURNAL_NAME}") if args.resume else None
+        if (journal is not None and plan is not None and plan.name == ADAPTIVE_PLAN
+                and journal.header.plan.name == ADAPTIVE_PLAN and plan.seed == journal.header.plan.seed):
+            plan = None  # the journal's plan has grown by its decisions: resume it as it stands
+    adaptive = _adaptive_settings(args, plan, journal)
     eye, sync = args.eye or "both", parse_sync(args.sync)
     settings = {"simulated": bool(args.simulate), "eye": eye, "sync": sync.text}
+    if adaptive is not None:
+        settings["adaptive"] = adaptive
     if journal is not None:
         _check_resume_settings(journal, args, effects)
         eye, sync = _recorded_eye_and_sync(journal, args)
@@ -445,10 +495,11 @@ def _run(args) -> int:
             # code gets RMTS,1 (the driver falls back, and logs it).
             meter = stack.enter_context(open_cs2000(port, timeout_s=_INSTRUMENT_TIMEOUT_S,
                                                     no_flash_write="if-supported"))
-            _set_sync(stack, meter, sync)
+            stack.enter_context(meter.synchronised(sync))  # SCMS for the run, put back after it
             if args.target:
                 _aim(display_kind, shown, eye, ctrl_c)
             options = {"clock": (lambda header, journal: simulation.clock)} if simulation else {}
+            options["planner"] = _planner(run_settings)
             if journal is None:
                 run_settings = {**run_settings, "remote_mode": meter.remote_mode}  # RMTS,2 or the fallback
                 run = MeasurementRun.start(args.out, run_plan, display, meter, settings=run_settings, **options)
@@ -464,6 +515,8 @@ def _run(args) -> int:
         summary = measure_on()
     print(f"measure: {summary.one_line('simulated' if args.simulate else 'session')}; "
           f"wrote {', '.join(str(p) for p in summary.outputs)}")
+    if summary.status == "finished" and settings.get("adaptive"):
+        print(f"measure: {held_out_summary(args.out)}")
     if summary.status == "cancelled":
         print(f"cancelled: run again with --resume --out {args.out} to continue", file=sys.stderr)
         return 130
@@ -567,22 +620,6 @@ def _recorded_eye_and_sync(journal, args) -> tuple:
 
 def _panel(eye: str) -> str:
     return "panels of both eyes" if eye == "both" else f"{eye} eye's panel"
-
-
-def _set_sync(stack: ExitStack, meter, sync: SyncMode) -> None:
-    """Put the CS-2000 in ``sync`` (``SCMS``) for the run, and back as it was when the run ends."""
-    previous = meter.sync_mode()
-    meter.set_sync_mode(sync.mode, sync.frequency_hz)
-
-    def restore():
-        if previous == sync:
-            return
-        try:
-            meter.set_sync_mode(previous.mode, previous.frequency_hz)
-        except (CS2000Error, OSError, ValueError) as error:  # the run's outcome stands; say it
-            print(f"measure: could not put the CS-2000's sync back to {previous.text} ({error})", file=sys.stderr)
-
-    stack.callback(restore)
 
 
 def _aim(kind: str, display, eye: str, ctrl_c: "_CtrlCCancels") -> None:
@@ -716,6 +753,7 @@ def _show_progress(run: MeasurementRun):
     try:
         for event in run.events():
             if isinstance(event, PatchStarted):
+                bar.total = event.total  # a dynamic plan (adaptive) grows as it goes
                 bar.n = event.done
                 eta = "" if event.eta_s is None else f", ETA {format_duration(event.eta_s)}"
                 bar.set_description(f"#{event.index} {event.patch.describe()}{eta}")

@@ -4,8 +4,10 @@
 :func:`open_run` turns it into a :class:`~workbench.measurement.runner.MeasurementRun`
 wired the way ``measure`` wires it (the simulated headset measured by the
 CS-2000 emulator on a pty, or a real CS-2000; the simulated headset, a
-full-screen patch window or a VR application's patch server), a new session
-or the resumption of the one journaled in the output directory.
+full-screen patch window, a VR application's patch server, or a Unity or
+Unreal project following the seed authors' conventions; the panel of one eye
+or both; the instrument's sync), a new session or the resumption of the one
+journaled in the output directory.
 :func:`plan_estimate` says how many patches a plan has and how long the
 instrument would take, before anything starts.
 
@@ -22,9 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from instruments.cs2000 import find_cs2000_ports, open_cs2000
+from instruments.cs2000 import SyncMode, find_cs2000_ports, open_cs2000
+from instruments.engine_displays import RGB_TEXT_DEFAULT_SETTLE_S, RgbTextPatchDisplay, ValueShotPatchDisplay
 from instruments.headset import HEADSET_EFFECTS, SimulatedHeadset
 from instruments.patch_display import (
+    EYES,
     MirroredPatchDisplay,
     PatchDisplayError,
     SimulatedPatchDisplay,
@@ -36,7 +40,8 @@ from workbench.measurement.plans import MEASUREMENT_PLANS, MeasurementPlan, meas
 from workbench.measurement.runner import JOURNAL_NAME, MeasurementRun
 from workbench.measurement.simulation import modelled_plan_duration_s, open_simulated_instrument
 
-__all__ = ["SIMULATED", "DISPLAY_KINDS", "PLAN_DESCRIPTIONS", "CalibrationSetup", "PlanEstimate", "plan_estimate",
+__all__ = ["SIMULATED", "DISPLAY_KINDS", "ENGINE_DEFAULT_ADDRESSES", "ONE_EYE_DISPLAYS", "SYNC_CHOICES",
+           "PLAN_DESCRIPTIONS", "CalibrationSetup", "PlanEstimate", "plan_estimate",
            "cs2000_ports", "planned", "open_run", "check_tcp_display"]
 
 SIMULATED = "simulated"
@@ -46,8 +51,22 @@ DISPLAY_KINDS = {
     "simulated": "simulated headset",
     "window": "full-screen window",
     "tcp": "VR application (TCP patch protocol)",
+    "rgb-text": "Unity project (R,G,B text)",
+    "value-shot": "Unreal project (Value/SHOT)",
 }
 """Patch display kind → how the form names it."""
+
+ENGINE_DEFAULT_ADDRESSES = {"rgb-text": ("127.0.0.1", 55001), "value-shot": ("127.0.0.1", 8890)}
+"""Where the authors' Unity and Unreal projects listen (``ConnectionUnity.m``, ``ConnectionUnreal.m``)."""
+
+ONE_EYE_DISPLAYS = ("simulated", "tcp")
+"""The displays that can show a patch to one eye (the simulation records it)."""
+
+SYNC_CHOICES = {"none": "no sync", "internal": "internal, at the panel's refresh rate", "external": "external"}
+"""The CS-2000's sync modes as the form names them."""
+
+VALUE_SHOT_RESEND_S = 1.0
+"""How often the Unreal convention's value is sent again until the engine answers ``SHOT``."""
 
 PLAN_DESCRIPTIONS = {
     "paper": "as in the paper",
@@ -101,6 +120,16 @@ class CalibrationSetup:
         (``measure --add-plan``: a follow-up of
         :mod:`workbench.diagnostics.follow_up`); the session's own
         instrument and effects are used, as on resume.
+    engine_address : (str, int) or None
+        For ``rgb-text`` and ``value-shot``: where the engine listens.
+    settle_s : float
+        For ``rgb-text``: seconds to wait after sending a patch (no acknowledgement).
+    eye : str
+        Which panel shows the patches (``both``, ``left``, ``right``;
+        :data:`ONE_EYE_DISPLAYS` only for one eye). A resumed session keeps its own.
+    sync : str
+        The CS-2000's sync: ``none``, ``internal:HZ`` (20-200 Hz) or
+        ``external``. A resumed session keeps its own.
     """
 
     out_dir: Path
@@ -116,6 +145,10 @@ class CalibrationSetup:
     faults: tuple = ()
     remeasure: tuple = ()
     add_plan: Path | None = None
+    engine_address: tuple | None = None
+    settle_s: float = RGB_TEXT_DEFAULT_SETTLE_S
+    eye: str = "both"
+    sync: str = "none"
 
     def __post_init__(self):
         simulated = self.instrument == SIMULATED
@@ -126,6 +159,22 @@ class CalibrationSetup:
                              "full-screen window or a VR application")
         if self.display == "tcp" and not self.tcp_address:
             raise InputError("the TCP patch display needs a host and a port (e.g. 127.0.0.1:47800)")
+        if self.display in ENGINE_DEFAULT_ADDRESSES and not self.engine_address:
+            host, port = ENGINE_DEFAULT_ADDRESSES[self.display]
+            raise InputError(f"the {DISPLAY_KINDS[self.display]} needs the engine's host and port "
+                             f"(e.g. {host}:{port})")
+        if not 0 <= self.settle_s <= 60:
+            raise InputError(f"settle time {self.settle_s:g} s must lie in 0..60 s")
+        if self.eye not in EYES:
+            raise InputError(f"eye {self.eye!r} must be one of {', '.join(EYES)}")
+        if self.eye != "both" and self.display not in ONE_EYE_DISPLAYS:
+            raise InputError(f"the {DISPLAY_KINDS[self.display]} shows each patch to both eyes; choose both "
+                             "eyes, or show the patches in a VR application (TCP patch protocol), which can "
+                             "show a patch to one eye")
+        try:
+            SyncMode.parse(self.sync)
+        except ValueError as error:
+            raise InputError(str(error)) from None
         if self.effects and not simulated:
             raise InputError("headset effects apply to the simulated CS-2000 only")
         unknown = sorted(set(self.effects) - set(HEADSET_EFFECTS))
@@ -162,7 +211,14 @@ class CalibrationSetup:
         if self.display == "window":
             return f"full-screen window on {'the last screen' if self.screen is None else f'screen {self.screen}'}"
         if self.display == "tcp":
-            return f"VR application at tcp:{self.tcp_address[0]}:{self.tcp_address[1]}"
+            eye = "" if self.eye == "both" else f", {self.eye} eye"
+            return f"VR application at tcp:{self.tcp_address[0]}:{self.tcp_address[1]}{eye}"
+        if self.display == "rgb-text":
+            host, port = self.engine_address
+            return f"Unity project at rgb-text:{host}:{port}:{self.settle_s:g}"
+        if self.display == "value-shot":
+            host, port = self.engine_address
+            return f"Unreal project at value-shot:{host}:{port}"
         return DISPLAY_KINDS[self.display]
 
 
@@ -262,9 +318,19 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
     if journal is not None and bool(journal.header.settings.get("simulated")) != setup.simulated:
         raise InputError(f"{journal.path} was measured {'with' if not setup.simulated else 'without'} a "
                          "real CS-2000; resume it with the same instrument, or choose another output directory")
+    if setup.display in ENGINE_DEFAULT_ADDRESSES and any(p.is_apl for p in plan.patches):
+        raise InputError(f"the plan {plan.name} has APL patches (windows on surrounds), and the "
+                         f"{DISPLAY_KINDS[setup.display]} shows full-field patches only; choose a plan without "
+                         "them (e.g. paper), or show the patches in a VR application (TCP patch protocol)")
+    if journal is None:
+        eye, sync = setup.eye, SyncMode.parse(setup.sync)
+    else:  # a resumed session is measured as it began (a journal from before they were recorded: both, none)
+        eye = journal.header.settings.get("eye", "both")
+        sync = SyncMode.parse(journal.header.settings.get("sync", "none"))
     with ExitStack() as stack:
         simulation = None
-        settings = {"simulated": setup.simulated} if journal is None else dict(journal.header.settings)
+        settings = ({"simulated": setup.simulated, "eye": eye, "sync": sync.text} if journal is None
+                    else dict(journal.header.settings))
         if setup.simulated:
             if journal is None:
                 seed = setup.seed if setup.seed is not None else (plan.seed if plan.seed is not None
@@ -281,9 +347,10 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
                 clock_offset_s=0.0 if journal is None else journal.session_end_s(), plan=plan,
                 session_length_s=settings.get("session_length_s")))
             settings["session_length_s"] = simulation.headset.session_length_s
-        display = _open_display(stack, setup, simulation, window_display)
+        display = _open_display(stack, setup, simulation, window_display, eye)
         port = simulation.server.port if simulation else (None if setup.instrument == "auto" else setup.instrument)
         meter = stack.enter_context(open_cs2000(port, timeout_s=_INSTRUMENT_TIMEOUT_S, no_flash_write="if-supported"))
+        stack.enter_context(meter.synchronised(sync))  # SCMS for the run, put back after it
         options = {"on_countdown": on_countdown}
         if simulation:
             options["clock"] = lambda header, journal: simulation.clock
@@ -298,7 +365,7 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
         yield run
 
 
-def _open_display(stack: ExitStack, setup: CalibrationSetup, simulation, window_display):
+def _open_display(stack: ExitStack, setup: CalibrationSetup, simulation, window_display, eye: str = "both"):
     if setup.display == "simulated":
         return SimulatedPatchDisplay(simulation.headset)
     if setup.display == "window":
@@ -306,9 +373,16 @@ def _open_display(stack: ExitStack, setup: CalibrationSetup, simulation, window_
             raise WorkbenchError("the full-screen patch window was not opened; choose the screen again")
         shown = window_display
     else:
-        host, port = setup.tcp_address
         try:
-            shown = stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S, client="vr-workbench gui"))
+            if setup.display == "rgb-text":
+                shown = RgbTextPatchDisplay(*setup.engine_address, setup.settle_s, _DISPLAY_TIMEOUT_S)
+            elif setup.display == "value-shot":
+                shown = stack.enter_context(ValueShotPatchDisplay(*setup.engine_address, _DISPLAY_TIMEOUT_S,
+                                                                  VALUE_SHOT_RESEND_S))
+            else:
+                host, port = setup.tcp_address
+                shown = stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S,
+                                                            client="vr-workbench gui", eye=eye))
         except PatchDisplayError as error:
             raise WorkbenchError(str(error)) from None
     # A simulated session measures the simulated headset, so it must see the patches too.

@@ -9,7 +9,11 @@ column and elide what does not fit (the whole text in the tooltip and in the
 open list), the buttons beside a field sit on their own row under it, the
 estimate wraps, and only the chosen patch display's settings show (the screen
 and "Identify screens" for a full-screen window, the address and "Test
-connection" for a VR application); nothing needs horizontal scrolling.
+connection" for a VR application, the engine's address (and the settle time
+of the Unity convention) for the seed authors' Unity and Unreal projects, the
+eye for the displays that can show a patch to one eye); nothing needs
+horizontal scrolling. The instrument's sync (none, internal at a frequency,
+external) sits next to the plan.
 """
 
 from __future__ import annotations
@@ -44,10 +48,14 @@ from PySide6.QtWidgets import (
 from instruments.headset import HEADSET_EFFECTS
 from workbench.errors import WorkbenchError
 from workbench.measurement.plans import MEASUREMENT_PLANS
+from instruments.cs2000 import INTERNAL_SYNC_RANGE_HZ, SyncMode
+from instruments.engine_displays import RGB_TEXT_DEFAULT_SETTLE_S
 from workbench.gui.calibration_setup import (
     DISPLAY_KINDS,
+    ENGINE_DEFAULT_ADDRESSES,
     PLAN_DESCRIPTIONS,
     SIMULATED,
+    SYNC_CHOICES,
     CalibrationSetup,
     cs2000_ports,
     plan_estimate,
@@ -104,8 +112,19 @@ class ElidingComboBox(QComboBox):
         painter.drawControl(QStyle.ControlElement.CE_ComboBoxLabel, option)
 
 
-def _field_with_button(field: QWidget, button: QPushButton) -> QWidget:
-    """``field`` over ``button`` (the button on its own row, at its full width, left-aligned)."""
+_DISPLAY_TIPS = {
+    "tcp": "a VR application speaking vr-workbench-patch/1: it says when each patch is on the panel, shows "
+           "APL windows and one eye, and reports errors",
+    "rgb-text": "the seed authors' Unity convention: R,G,B sent on a new connection per patch, then a fixed "
+                "settle time (no acknowledgement, both eyes, full field only)",
+    "value-shot": "the seed authors' Unreal convention: Value:r,g,b sent (again every second) until the engine "
+                  "answers SHOT (both eyes, full field only)",
+}
+
+
+def _field_with_button(field: QWidget, button: QPushButton, beside: QWidget | None = None) -> QWidget:
+    """``field`` over ``button`` (the button on its own row, at its full width, left-aligned; ``beside``
+    after it on that row)."""
     box = QWidget()
     column = QVBoxLayout(box)
     column.setContentsMargins(0, 0, 0, 0)
@@ -113,7 +132,10 @@ def _field_with_button(field: QWidget, button: QPushButton) -> QWidget:
     column.addWidget(field)
     row = QHBoxLayout()
     row.addWidget(button)
-    row.addStretch(1)
+    if beside is not None:
+        row.addWidget(beside, 1)
+    else:
+        row.addStretch(1)
     column.addLayout(row)
     return box
 
@@ -143,6 +165,7 @@ class CalibrationForm(QWidget):
         self.changed.connect(self._update_estimate)
         self._instrument_changed()
         self._display_changed()
+        self._plan_changed()
         self._update_estimate()
 
     # -- groups -----------------------------------------------------------------------
@@ -186,6 +209,8 @@ class CalibrationForm(QWidget):
         self.display = ElidingComboBox()
         for kind, name in DISPLAY_KINDS.items():
             self.display.addItem(name, kind)
+            if kind in _DISPLAY_TIPS:
+                self.display.setItemData(self.display.count() - 1, _DISPLAY_TIPS[kind], Qt.ItemDataRole.ToolTipRole)
         form.addRow("show patches on", self.display)
         self.screen = ElidingComboBox()
         for i, screen in enumerate(QGuiApplication.screens()):
@@ -197,16 +222,35 @@ class CalibrationForm(QWidget):
         self.identify.clicked.connect(lambda: identify_screens(self))
         self._screen_row = _field_with_button(self.screen, self.identify)
         form.addRow("screen", self._screen_row)
+        self.eye = ElidingComboBox()
+        for eye, name in (("both", "both eyes"), ("left", "left eye"), ("right", "right eye")):
+            self.eye.addItem(name, eye)
+        self.eye.setToolTip("which panel shows the patches (the other is black); the journal, session and "
+                            "profile record it")
         self.tcp = QLineEdit("127.0.0.1:47800")
         self.test_tcp = QPushButton("Test connection")
         self.test_tcp.setToolTip("say hello to the VR application's patch server at this address")
         self.test_tcp.clicked.connect(self.test_connection)
-        self._tcp_row = _field_with_button(self.tcp, self.test_tcp)
+        self._tcp_row = _field_with_button(self.tcp, self.test_tcp, self.eye)
         form.addRow("patch server", self._tcp_row)
         self.tcp_status = QLabel("")
         self.tcp_status.setWordWrap(True)
         form.addRow("", self.tcp_status)
+        self.engine = QLineEdit("{}:{}".format(*ENGINE_DEFAULT_ADDRESSES["rgb-text"]))
+        self.engine.setToolTip("where the Unity (port 55001) or Unreal (port 8890) project listens, HOST:PORT")
+        self.settle = QDoubleSpinBox(decimals=2, singleStep=0.5, suffix=" s settle")
+        self.settle.setRange(0.0, 60.0)
+        self.settle.setValue(RGB_TEXT_DEFAULT_SETTLE_S)
+        self.settle.setToolTip("the Unity convention sends no acknowledgement: seconds to wait after each patch "
+                               "before measuring (the authors wait 2 s)")
+        self._engine_row = QWidget()
+        row = QHBoxLayout(self._engine_row)
+        row.setContentsMargins(0, 0, 0, 0)
+        row.addWidget(self.engine, 1)
+        row.addWidget(self.settle)
+        form.addRow("engine", self._engine_row)
         self._display_form = form
+        self._engine_kind = "rgb-text"
         self.display.currentIndexChanged.connect(self._display_changed)
         return group
 
@@ -220,6 +264,24 @@ class CalibrationForm(QWidget):
                 self.plan.setItemData(self.plan.count() - 1, PLAN_DESCRIPTIONS[name], Qt.ItemDataRole.ToolTipRole)
         self.plan.addItem("from a file…", "file")
         form.addRow("plan", self.plan)
+        self.sync = ElidingComboBox()
+        for mode, name in SYNC_CHOICES.items():
+            self.sync.addItem(name, mode)
+        self.sync.setToolTip("the CS-2000's synchronisation to the panel: a low-persistence HMD panel flashes "
+                             "once a frame, and unsynchronised measurements of it scatter")
+        self.sync_hz = QDoubleSpinBox(decimals=2, singleStep=1.0, suffix=" Hz")
+        self.sync_hz.setRange(*INTERNAL_SYNC_RANGE_HZ)
+        self.sync_hz.setValue(90.0)
+        self.sync_hz.setToolTip("the panel's refresh rate (HTC Vive 90 Hz)")
+        sync_row = QWidget()
+        row = QHBoxLayout(sync_row)
+        row.setContentsMargins(0, 0, 0, 0)
+        row.addWidget(self.sync, 1)
+        row.addWidget(self.sync_hz)
+        form.addRow("sync", sync_row)
+        self.sync.currentIndexChanged.connect(
+            lambda: self.sync_hz.setEnabled(self.sync.currentData() == "internal"))
+        self.sync_hz.setEnabled(False)
         row = QHBoxLayout()
         self.plan_file = QLineEdit()
         self.plan_file.setPlaceholderText("CSV with columns kind,r,g,b")
@@ -227,7 +289,12 @@ class CalibrationForm(QWidget):
         browse.clicked.connect(self._choose_plan_file)
         row.addWidget(self.plan_file, 1)
         row.addWidget(browse)
-        form.addRow("plan file", row)
+        self._plan_file_row = QWidget()
+        self._plan_file_row.setLayout(row)
+        row.setContentsMargins(0, 0, 0, 0)
+        form.addRow("plan file", self._plan_file_row)
+        self._plan_form = form
+        self.plan.currentIndexChanged.connect(self._plan_changed)
         self.seed = QSpinBox()
         self.seed.setRange(0, 2**31 - 1)
         self.seed.setValue(secrets.randbelow(2**31))
@@ -248,7 +315,8 @@ class CalibrationForm(QWidget):
         form.addRow("output directory", row)
         for signal in (self.plan.currentIndexChanged, self.plan_file.textChanged, self.seed.valueChanged,
                        self.out_dir.textChanged, self.time_scale.valueChanged, self.instrument.currentIndexChanged,
-                       self.display.currentIndexChanged):
+                       self.display.currentIndexChanged, self.sync.currentIndexChanged, self.sync_hz.valueChanged,
+                       self.eye.currentIndexChanged, self.engine.textChanged, self.settle.valueChanged):
             signal.connect(self.changed)
         return group
 
@@ -286,7 +354,20 @@ class CalibrationForm(QWidget):
         # Only the chosen display's settings: the form then fits a 1366 × 768 screen without scrolling.
         self._display_form.setRowVisible(self._screen_row, kind == "window")
         self._display_form.setRowVisible(self._tcp_row, kind == "tcp")
+        engine = kind in ENGINE_DEFAULT_ADDRESSES
+        if engine and kind != self._engine_kind:  # the other convention's default port: take this one's
+            if self.engine.text().strip() == "{}:{}".format(*ENGINE_DEFAULT_ADDRESSES[self._engine_kind]):
+                self.engine.setText("{}:{}".format(*ENGINE_DEFAULT_ADDRESSES[kind]))
+            self._engine_kind = kind
+        self.engine.setEnabled(engine)
+        self.settle.setVisible(kind == "rgb-text")
+        self._display_form.setRowVisible(self._engine_row, engine)
+        self.eye.setEnabled(kind == "tcp")
         self._display_form.setRowVisible(self.tcp_status, kind == "tcp" and bool(self.tcp_status.text()))
+
+    def _plan_changed(self) -> None:
+        """The plan file's row shows only for a plan from a file (the form then fits 1366 × 768)."""
+        self._plan_form.setRowVisible(self._plan_file_row, self.plan.currentData() == "file")
 
     def _set_tcp_status(self, text: str) -> None:
         self.tcp_status.setText(text)
@@ -308,6 +389,17 @@ class CalibrationForm(QWidget):
         if not host or not port.isdigit() or not 0 < int(port) < 65536:
             raise WorkbenchError(f"patch server {self.tcp.text()!r} is not HOST:PORT (e.g. 127.0.0.1:47800)")
         return host, int(port)
+
+    def engine_address(self) -> tuple:
+        host, _, port = self.engine.text().strip().rpartition(":")
+        if not host or not port.isdigit() or not 0 < int(port) < 65536:
+            raise WorkbenchError(f"engine {self.engine.text()!r} is not HOST:PORT (e.g. 127.0.0.1:55001)")
+        return host, int(port)
+
+    def sync_text(self) -> str:
+        """The sync chosen, as ``measure --sync`` spells it (``none``, ``internal:90``, ``external``)."""
+        mode = self.sync.currentData()
+        return SyncMode.parse(f"internal:{self.sync_hz.value():.2f}").text if mode == "internal" else mode
 
     def test_connection(self) -> None:
         """Say hello to the patch server off the GUI thread; the label says what answered."""
@@ -350,6 +442,10 @@ class CalibrationForm(QWidget):
             plan_name=self.plan.currentData(),
             plan_file=Path(self.plan_file.text()) if self.plan.currentData() == "file" else None,
             seed=self.seed.value(),
+            engine_address=self.engine_address() if kind in ENGINE_DEFAULT_ADDRESSES else None,
+            settle_s=self.settle.value(),
+            eye=self.eye.currentData() if kind == "tcp" else "both",
+            sync=self.sync_text(),
         )
         fields.update(changes)
         return CalibrationSetup(**fields)
