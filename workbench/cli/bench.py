@@ -193,6 +193,32 @@ def _follow_up_run(args: argparse.Namespace):
     return _BenchTable(bench.summarize(outcomes), bench.table(outcomes))
 
 
+def _plans_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--sessions", type=int, default=2, metavar="N",
+                        help="displays per scenario (default 2)")
+    parser.add_argument("--scenarios", nargs="+", metavar="NAME",
+                        help="only these scenarios (default: clean, every effect form, the pairs, "
+                             "the simulated headset)")
+    parser.add_argument("--markdown", action="store_true", help="print the docs' table")
+
+
+def _plans_run(args: argparse.Namespace):
+    bench = _from_tests("plans_bench")
+    if args.sessions < 1:
+        from workbench.errors import InputError
+
+        raise InputError(f"--sessions {args.sessions}: give at least 1 display per scenario")
+    known = bench.scenarios()
+    unknown = [name for name in args.scenarios or () if name not in known]
+    if unknown:
+        from workbench.errors import InputError
+
+        raise InputError(f"--scenarios: unknown {', '.join(map(repr, unknown))}; use some of "
+                         f"{', '.join(known)}")
+    outcomes = bench.run_plans_bench(args.sessions, args.scenarios)
+    return bench.PlansBenchResult(outcomes, args.markdown)
+
+
 BENCHMARKS: dict[str, Benchmark] = {
     "relight": Benchmark("level-2 relight by the runtime bundle's method (K + S float16 "
                          "channels) vs the full-band path",
@@ -210,6 +236,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "follow-up": Benchmark("the proposed follow-up measured on the same generated display: its "
                            "share of the instrument time and the held-out gain before and after",
                            _seeds_arguments, _follow_up_run),
+    "plans": Benchmark("paper, paper+greys and adaptive measured through the CS-2000 emulator on the "
+                       "independent generator's displays and the simulated headset: instrument time, "
+                       "hidden-colour ΔE00, effects named", _plans_arguments, _plans_run),
     "gui": Benchmark("the window: event-loop stalls while calibrating, source switch, first paint",
                      _gui_arguments, _gui_run),
 }

@@ -71,7 +71,7 @@ __all__ = ["ADAPTIVE_PLAN", "CORE_LEVELS", "CORE_GREYS", "DRIFT_REFERENCE_INTERV
            "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "PAPER_SHARE", "CHECKPOINT_GROWTH",
            "SWEEP_STEP", "GREY_STEP", "MIXTURE_CUBE", "AdaptiveSettings", "Decision", "PlanState",
            "AdaptivePlanner", "adaptive_core_plan", "plan_state", "replay_decisions",
-           "validation_patches"]
+           "validation_patches", "held_out_summary"]
 
 ADAPTIVE_PLAN = "adaptive"
 """The plan's name (``measure --plan adaptive``)."""
@@ -392,9 +392,12 @@ class AdaptivePlanner:
         gain = before - after
         fits = elapsed + costs + reserve <= budget
         if not fits.any():
+            over = (f"; the core and the validation colours alone take "
+                    f"{(elapsed + reserve) / 60:.1f} min, more than the budget" if number == 1
+                    and elapsed + reserve > budget else "")
             return stop(f"the budget of {budget / 60:.1f} min is reached ({elapsed / 60:.1f} min "
                         f"measured; the validation colours and a last white need "
-                        f"{reserve / 60:.1f} min)")
+                        f"{reserve / 60:.1f} min{over})")
         rate = np.where(fits, gain / np.maximum(costs, 1e-3), -np.inf)
         best = int(np.argmax(rate))  # ties: the first candidate (a fixed order)
         per_minute = 60.0 * rate[best]
@@ -572,3 +575,28 @@ def replay_decisions(journal: Journal, planner: AdaptivePlanner | None = None) -
         pairs.append((journaled, None if replayed is None else {"record": "decision",
                                                                **replayed.to_json()}))
     return pairs
+
+
+def held_out_summary(out_dir) -> str:
+    """One line: the exported model's mean ΔE00 on the session's validation colours, with its 95 % CI.
+
+    The session in ``out_dir`` (its ``session.csv``) is diagnosed
+    (:func:`workbench.diagnostics.diagnose`: the validation colours are read
+    only to score the final model); the interval is Student's t on the
+    per-colour ΔE00, so fewer validation colours show as a wider interval.
+    """
+    from scipy import stats
+
+    from workbench.diagnostics import diagnose
+    from workbench.session_readers import read_session
+
+    try:
+        diagnosis = diagnose(read_session(out_dir))
+    except (InputError, ValueError, np.linalg.LinAlgError) as error:
+        return f"held-out score not computed: {error}"
+    dE = np.asarray(diagnosis.extended_dE, dtype=float)
+    if dE.size < 2:
+        return "held-out score not computed: fewer than 2 validation colours"
+    half = float(stats.t.ppf(0.975, dE.size - 1) * dE.std(ddof=1) / np.sqrt(dE.size))
+    return (f"held-out (the exported model on the {dE.size} validation colours): mean ΔE00 "
+            f"{dE.mean():.3f}, 95 % CI {dE.mean() - half:.3f}–{dE.mean() + half:.3f} (± {half:.3f})")

@@ -1,0 +1,201 @@
+"""The adaptive plan: within its budget, every decision journaled with its reason, the same decisions
+after a crash, the validation colours never read, greys and mixtures where the channels interact.
+
+The meter measures the simulated headset noiselessly and advances a modelled session clock by the
+CS-2000 emulator's timing model (announcing its countdown as ``MEAS,1`` would), so a run is a
+deterministic function of its patches: a run cancelled half-way and resumed must decide exactly
+what an uninterrupted run decides.
+"""
+
+from dataclasses import replace
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from instruments.cs2000 import measurement_timing, radiance_to_luminance
+from instruments.headset import SimulatedHeadset
+from workbench.cli import main
+from workbench.measurement.adaptive import (
+    AdaptivePlanner,
+    AdaptiveSettings,
+    adaptive_core_plan,
+    plan_state,
+    replay_decisions,
+)
+from workbench.measurement.journal import read_journal
+from workbench.measurement.patch_cost import fit_patch_cost
+from workbench.measurement.runner import JOURNAL_NAME, MeasurementRun, PatchMeasured
+from workbench.measurement.simulation import ModelledSessionClock
+
+from .conftest import RecordingDisplay, ScriptedMeter
+
+SEED = 11
+SETTINGS = AdaptiveSettings(seed=SEED, budget_min=18.0, validation=6, floor_dE00_per_min=0.002)
+EFFECTS = {"channel-interaction": 0.1}
+
+
+class TimedMeter(ScriptedMeter):
+    """The scripted meter with the emulator's timing: the clock advances, the countdown is announced."""
+
+    def __init__(self, headset, clock):
+        super().__init__(headset)
+        self.clock = clock
+
+    def measure(self, progress=None, cancel=None):
+        measured = super().measure(progress, cancel)
+        timing = measurement_timing(radiance_to_luminance(self.headset.current_radiance()))
+        self.clock.advance(timing.duration_s)
+        return SimpleNamespace(**vars(measured), measurement_time_s=timing.measurement_s)
+
+
+def _run(out, cancel_after=None, resume=False):
+    """Measure (or resume) the adaptive plan in ``out``; cancel after ``cancel_after`` patches."""
+    headset = SimulatedHeadset(EFFECTS)
+    display = RecordingDisplay(headset)
+    if resume:
+        journal = read_journal(out / JOURNAL_NAME)
+        clock = ModelledSessionClock(journal.session_end_s())
+        run = MeasurementRun.resume_session(out, display, TimedMeter(headset, clock), journal=journal,
+                                            clock=lambda h, j: clock, planner=AdaptivePlanner(SETTINGS))
+    else:
+        clock = ModelledSessionClock()
+        run = MeasurementRun.start(out, adaptive_core_plan(SEED), display, TimedMeter(headset, clock),
+                                   settings={"adaptive": SETTINGS.to_json()}, clock=lambda h, j: clock,
+                                   planner=AdaptivePlanner(SETTINGS))
+    measured = 0
+    for event in run.events():
+        if isinstance(event, PatchMeasured):
+            measured += 1
+            if cancel_after is not None and measured == cancel_after:
+                run.cancel()
+    return read_journal(out / JOURNAL_NAME)
+
+
+@pytest.fixture(scope="module")
+def whole(tmp_path_factory):
+    """An uninterrupted adaptive run on a headset whose channels interact (a 10 % power limit)."""
+    return _run(tmp_path_factory.mktemp("adaptive") / "session")
+
+
+def _measured(decisions):
+    return [d for d in decisions if d["action"] == "measure"]
+
+
+def test_stops_within_budget_with_every_decision_explained(whole):
+    decisions = whole.decisions
+    assert decisions and decisions[-1]["action"] == "stop"
+    assert sum(d["action"] == "stop" for d in decisions) == 1
+    assert not whole.pending_indices()
+    for d in _measured(decisions):
+        assert "predicted held-out ΔE00" in d["reason"] and " → " in d["reason"] and " s" in d["reason"]
+        assert d["predicted_after_dE00"] < d["predicted_dE00"]
+        assert len(d["patches"]) == 1
+    assert "stop:" in decisions[-1]["reason"]
+    budget_s = 60 * SETTINGS.budget_min
+    assert all(d["budget_s"] == budget_s for d in decisions)
+    # the planner reserved the validation colours' time: what was measured stays within the budget,
+    # give or take what the cost model mispredicts of the last patches
+    total = sum(r.duration_s for r in whole.records)
+    stop = decisions[-1]
+    assert stop["elapsed_s"] + stop["cost_s"] <= budget_s
+    assert total <= 1.1 * budget_s
+    state = plan_state(whole)
+    assert state.stopped and state.planned == len(whole.header.plan) and state.time_left_s >= 0
+    assert len(state.history) == len(decisions)
+
+
+def test_an_interaction_gets_greys_and_mixtures(whole):
+    kinds = [p[0] for d in _measured(whole.decisions) for p in d["patches"]]
+    assert {"grey", "mixture"} & set(kinds)
+    assert sum(k in ("grey", "mixture") for k in kinds) >= len(kinds) / 2
+    assert any("how the channels combine" in d["reason"] for d in _measured(whole.decisions))
+
+
+def test_drift_references_by_elapsed_time(whole):
+    whites = [r for r in whole.records if r.kind == "white"]
+    gaps = np.diff([r.t_s for r in whites])
+    references = [d for d in whole.decisions if d["action"] == "drift-reference"]
+    assert references and all("since the last white" in d["reason"] for d in references)
+    # a reference is due 120 s after the last white; a patch in flight may add its own seconds
+    longest_patch = max(r.duration_s for r in whole.records if r.kind != "black")
+    fit_gaps = gaps[:-1]  # the last gap spans the validation colours
+    assert np.all(fit_gaps[1:] <= 120 + 2 * longest_patch)
+
+
+def test_resume_after_a_crash_reproduces_the_decisions(whole, tmp_path):
+    out = tmp_path / "session"
+    core = len(adaptive_core_plan(SEED))
+    first = _run(out, cancel_after=core + 8)
+    assert 0 < len(first.decisions) < len(whole.decisions)
+    resumed = _run(out, resume=True)
+
+    def essentials(decisions):
+        return [(d["action"], d["patches"], d["reason"]) for d in decisions]
+
+    assert essentials(resumed.decisions) == essentials(whole.decisions)
+    assert [r.rgb for r in resumed.ok_records()] == [r.rgb for r in whole.ok_records()]
+
+
+def test_replay_gives_the_journaled_decisions(whole):
+    pairs = replay_decisions(whole)
+    assert len(pairs) == len(whole.decisions)
+    for journaled, replayed in pairs:
+        assert replayed["patches"] == journaled["patches"]
+        assert replayed["reason"] == journaled["reason"]
+
+
+def test_validation_colours_are_never_read(whole):
+    # the validation colours come only with the stop, last
+    for d in whole.decisions[:-1]:
+        assert all(p[0] != "validation" for p in d["patches"])
+    assert [p[0] for p in whole.decisions[-1]["patches"]][:-1] == ["validation"] * SETTINGS.validation
+    # and their measurements change nothing: with them replaced by nonsense, every decision replays
+    nonsense = tuple(replace(r, XYZ=(1e3, 1e-3, 5e2), Lv=1e-3, duration_s=r.duration_s)
+                     if r.kind == "validation" else r for r in whole.records)
+    tampered = replace(whole, records=nonsense)
+    for journaled, replayed in replay_decisions(tampered):
+        assert replayed["reason"] == journaled["reason"]
+    assert all(r.kind != "validation" for r in AdaptivePlanner.fit_records(whole))
+
+
+def test_patch_cost_comes_from_the_session():
+    clock = ModelledSessionClock()
+    records = [SimpleNamespace(ok=True, Lv=L, duration_s=d, measurement_time_s=t, rgb=rgb)
+               for L, d, t, rgb in ((0.0, 252.0, 242, (0, 0, 0)), (100.0, 3.0, 2, (255, 255, 255)),
+                                    (1.0, 30.0, 24, (0, 0, 64)), (10.0, 8.0, 6, (0, 0, 128)))]
+    del clock
+    model = fit_patch_cost(records)
+    seconds = model.seconds([100.0, 10.0, 1.0, 0.1, 0.0])
+    assert np.all(np.diff(seconds) >= 0)  # darker never cheaper
+    assert seconds[0] == pytest.approx(3.0) and seconds[2] == pytest.approx(30.0)
+    assert 30.0 < seconds[3] <= 252.0 and seconds[4] == pytest.approx(252.0)
+    assert "countdown" in model.describe()
+
+
+def test_measure_cli_adaptive(tmp_path, capsys):
+    out = tmp_path / "session"
+    code = main(["measure", "--simulate", "--plan", "adaptive", "--seed", "4", "--budget-min", "16",
+                 "--validation", "5", "--out", str(out)])
+    printed = capsys.readouterr().out
+    assert code == 0
+    assert "held-out" in printed and "95 % CI" in printed
+    journal = read_journal(out / JOURNAL_NAME)
+    assert journal.header.settings["adaptive"]["budget_min"] == 16
+    assert journal.decisions[-1]["action"] == "stop"
+
+
+def test_measure_cli_refuses_adaptive_options_elsewhere(tmp_path, capsys):
+    code = main(["measure", "--simulate", "--plan", "quick", "--budget-min", "5", "--out", str(tmp_path / "x")])
+    assert code == 2
+    assert "--budget-min" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_bench_plans_prints_its_table(capsys):
+    code = main(["bench", "plans", "--sessions", "2", "--scenarios", "headset clean"])
+    printed = capsys.readouterr().out
+    assert code == 0
+    for plan in ("paper", "paper+greys", "adaptive"):
+        assert plan in printed
+    assert "acceptance over 2 displays" in printed
