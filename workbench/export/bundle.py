@@ -71,6 +71,9 @@ __all__ = [
     "write_bundle",
     "runtime_file",
     "unity_package_files",
+    "LIGHTBOOTH_CUBES",
+    "lightbooth_cubes",
+    "write_lightbooth_cubes",
 ]
 
 BUNDLE_FORMAT = "vr-colour-workbench-bundle"
@@ -86,6 +89,12 @@ bundle as ``runtime/unity/`` (:func:`unity_package_files`)."""
 _NOT_PACKAGE = shutil.ignore_patterns("__pycache__", "*.pyc", ".DS_Store")
 
 _NAME = re.compile(r"[^A-Za-z0-9_-]+")
+
+LIGHTBOOTH_CUBES = ("colorchecker", "ishihara")
+"""Level-2 cubes the Unity package's Lightbooth sample shows (:func:`lightbooth_cubes`)."""
+
+BOARD_FRAME_REFLECTANCE = 0.02
+"""Flat reflectance of the ColorChecker board's black frame in :func:`lightbooth_cubes`."""
 
 
 def runtime_file(name: str) -> Path:
@@ -114,6 +123,40 @@ def unity_package_files() -> tuple[str, ...]:
     return tuple(sorted(path.relative_to(root).as_posix() for path in root.rglob("*")
                         if path.is_file() and "__pycache__" not in path.parts
                         and path.suffix != ".pyc" and path.name != ".DS_Store"))
+
+
+def lightbooth_cubes() -> list:
+    """The Lightbooth sample's cubes as ``(name, ReflectanceCube)``, for ``write_bundle(cubes=...)``.
+
+    The workbench's own booth surfaces (:func:`workbench.scene.images.scene_content`): the
+    ColorChecker board (24 patches in their label layout, the frame a flat
+    :data:`BOARD_FRAME_REFLECTANCE`) and Ishihara plate 3 of the paper's set, sampled at the
+    paper's 101 bands (380–780 nm, 4 nm: every fourth of the working 1 nm bands).
+    """
+    from workbench.colorimetry import WORKING_WAVELENGTHS
+    from workbench.hyperspectral import PAPER_CUBE_WAVELENGTHS, ReflectanceCube
+    from workbench.scene.images import scene_content
+
+    bands = np.searchsorted(WORKING_WAVELENGTHS, PAPER_CUBE_WAVELENGTHS)
+    assert np.array_equal(WORKING_WAVELENGTHS[bands], PAPER_CUBE_WAVELENGTHS)
+    content = scene_content()
+    board = np.vstack([np.full((1, len(WORKING_WAVELENGTHS)), BOARD_FRAME_REFLECTANCE),
+                       content.board_reflectances])[:, bands]
+    plate = content.plate_reflectances[:, bands]
+    return [("colorchecker", ReflectanceCube(board[content.board_labels + 1].astype(np.float32),
+                                             PAPER_CUBE_WAVELENGTHS, "ColorChecker board (scene)")),
+            ("ishihara", ReflectanceCube(plate[content.plate_labels].astype(np.float32),
+                                         PAPER_CUBE_WAVELENGTHS, "Ishihara plate 3 (scene)"))]
+
+
+def write_lightbooth_cubes(folder) -> list[Path]:
+    """Write :func:`lightbooth_cubes` as ``colorchecker.npz`` and ``ishihara.npz`` in ``folder``
+    (for ``export --cube``; the file names give the cube names)."""
+    from workbench.hyperspectral import write_cube
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    return [write_cube(cube, folder / f"{name}.npz") for name, cube in lightbooth_cubes()]
 
 
 @dataclass(frozen=True)

@@ -551,6 +551,14 @@ namespace UnityEngine
             return null;
         }
         public void SetActive(bool value) { activeSelf = value; }
+        // test double: a primitive has a MeshRenderer and a Collider, as in Unity
+        public static GameObject CreatePrimitive(PrimitiveType type)
+        {
+            var primitive = new GameObject(type.ToString());
+            primitive.AddComponent<MeshRenderer>();
+            primitive.AddComponent<Collider>();
+            return primitive;
+        }
     }
 
     /// <summary>Test double of Unity's JsonUtility (see the header of this file).</summary>
@@ -751,5 +759,100 @@ namespace UnityEngine
                 Fail("not a JSON value");
             return double.Parse(text.Substring(start, position - start), NumberStyles.Float, CultureInfo.InvariantCulture);
         }
+    }
+}
+
+// --- Signatures the Lightbooth sample uses (Samples~/Lightbooth): compiled, never run here ---
+namespace UnityEngine
+{
+    public enum PrimitiveType { Sphere = 0, Capsule = 1, Cylinder = 2, Cube = 3, Plane = 4, Quad = 5 }
+    public enum ColorSpace { Uninitialized = -1, Gamma = 0, Linear = 1 }
+    public enum TextAnchor { UpperLeft = 0, UpperCenter = 1, UpperRight = 2, MiddleLeft = 3, MiddleCenter = 4, MiddleRight = 5, LowerLeft = 6, LowerCenter = 7, LowerRight = 8 }
+    public enum KeyCode { None = 0, Space = 32, Alpha1 = 49, Alpha2 = 50, L = 108, N = 110 }
+
+    public static class QualitySettings
+    {
+        public static ColorSpace activeColorSpace = ColorSpace.Linear;   // test double: settable
+    }
+
+    public static class Input
+    {
+        public static bool GetKeyDown(KeyCode key) { return false; }
+    }
+
+    public class Collider : Component { }
+
+    public class Camera : Behaviour
+    {
+        public static Camera main { get; set; }
+    }
+
+    public struct Ray
+    {
+        public Vector3 origin, direction;
+        public Ray(Vector3 origin, Vector3 direction) { this.origin = origin; this.direction = direction; }
+    }
+
+    public struct RaycastHit
+    {
+        public Collider collider { get; set; }
+        public Vector3 point { get; set; }
+    }
+
+    public static class Physics
+    {
+        public static bool Raycast(Ray ray, out RaycastHit hitInfo, float maxDistance) { hitInfo = new RaycastHit(); return false; }
+    }
+
+    public class Font : Object
+    {
+        public Material material { get; set; }
+    }
+
+    public sealed class TextMesh : Component
+    {
+        public string text { get; set; }
+        public Font font { get; set; }
+        public int fontSize { get; set; }
+        public float characterSize { get; set; } = 1f;
+        public TextAnchor anchor { get; set; }
+        public Color color { get; set; } = Color.white;
+    }
+
+    public static class Resources
+    {
+        public static T GetBuiltinResource<T>(string path) where T : Object { return null; }
+    }
+
+}
+
+namespace UnityEngine.XR
+{
+    [Flags]
+    public enum InputDeviceCharacteristics : uint { None = 0, HeadMounted = 1, Camera = 2, HeldInHand = 4, HandTracking = 8, EyeTracking = 16, TrackedDevice = 32, Controller = 64, TrackingReference = 128, Left = 256, Right = 512, Simulated6DOF = 1024 }
+
+    public struct InputFeatureUsage<T>
+    {
+        public string name { get; private set; }
+        public InputFeatureUsage(string usageName) { name = usageName; }
+    }
+
+    public static class CommonUsages
+    {
+        public static InputFeatureUsage<bool> primaryButton = new InputFeatureUsage<bool>("PrimaryButton");
+        public static InputFeatureUsage<bool> secondaryButton = new InputFeatureUsage<bool>("SecondaryButton");
+        public static InputFeatureUsage<bool> triggerButton = new InputFeatureUsage<bool>("TriggerButton");
+    }
+
+    public struct InputDevice
+    {
+        public bool isValid { get { return false; } }
+        public string name { get { return ""; } }
+        public bool TryGetFeatureValue(InputFeatureUsage<bool> usage, out bool value) { value = false; return false; }
+    }
+
+    public static class InputDevices
+    {
+        public static void GetDevicesWithCharacteristics(InputDeviceCharacteristics desiredCharacteristics, System.Collections.Generic.List<InputDevice> inputDevices) { inputDevices.Clear(); }
     }
 }
