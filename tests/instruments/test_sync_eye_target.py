@@ -358,3 +358,50 @@ def test_the_form_offers_the_sync_the_eye_and_the_engines(qtbot, tmp_path):
     assert form.setup().engine_address == ("127.0.0.1", 8890) and not form.settle.isVisibleTo(form)
     form.sync.setCurrentIndex(form.sync.findData("none"))
     assert form.setup().sync == "none" and not form.sync_hz.isEnabled()
+
+
+# -- against the reference patch server (instruments.patch_server) --------------------------
+
+def test_measure_eye_left_with_target_against_the_reference_server(tmp_path, monkeypatch, capsys):
+    from instruments.patch_server import PatchServer
+
+    presented, targets = [], []
+    monkeypatch.setattr("sys.stdin", io.StringIO("\n"))
+    with PatchServer(lambda rgb, **fields: presented.append((rgb, fields.get("eye", "both"))),
+                     show_target=targets.append) as server:
+        server.start()
+        host, port = server.address
+        assert _measure(tmp_path, "--display", f"tcp:{host}:{port}", "--eye", "left", "--target") == 0
+    assert targets == ["left"]
+    assert presented == [([255, 255, 255], "left"), ([10, 200, 30], "left"), ([0, 0, 0], "left")]
+    assert read_journal(tmp_path / "run" / JOURNAL_NAME).header.eye == "left"
+
+
+def test_a_reference_server_from_before_eye_stops_the_run_and_resume_continues(tmp_path, capsys):
+    from instruments.patch_server import PatchServer
+
+    with PatchServer(lambda rgb, **fields: None, eye_field=False) as server:
+        server.start()
+        host, port = server.address
+        assert _measure(tmp_path, "--display", f"tcp:{host}:{port}", "--eye", "right") == 2
+    err = capsys.readouterr().err
+    assert f"the display at tcp:{host}:{port} cannot show a patch to one eye (" in err
+    assert "update the VR application's patch server, or measure with --eye both" in err
+    assert read_journal(tmp_path / "run" / JOURNAL_NAME).records == ()  # kept for --resume
+    with PatchServer(lambda rgb, **fields: None) as server:
+        server.start()
+        host, port = server.address
+        assert main(["measure", "--simulate", "--resume", "--display", f"tcp:{host}:{port}",
+                     "--out", str(tmp_path / "run")]) == 0
+    assert len(read_journal(tmp_path / "run" / JOURNAL_NAME).ok_records()) == 3
+
+
+def test_a_reference_server_without_target_is_named(tmp_path, monkeypatch, capsys):
+    from instruments.patch_server import PatchServer
+
+    monkeypatch.setattr("sys.stdin", io.StringIO("\n"))
+    with PatchServer(lambda rgb, **fields: None, target_command=False) as server:
+        server.start()
+        host, port = server.address
+        assert _measure(tmp_path, "--display", f"tcp:{host}:{port}", "--target") == 2
+    assert f"the display at tcp:{host}:{port} cannot show the centring target" in capsys.readouterr().err
