@@ -55,7 +55,8 @@ from tests.diagnostics.independent_generator import FORMS, PAIRED_FORMS, generat
 
 __all__ = ["PLANS", "HIDDEN_COLOURS", "TIME_SHARE", "MEAN_MARGIN", "INTERACTION_FORMS",
            "INTERACTION_GAIN", "FIRST_SEED", "scenarios", "radiance_of_XYZ", "PlanOutcome",
-           "measure_plan", "run_plans_bench", "summarize", "table", "markdown"]
+           "measure_plan", "run_plans_bench", "summarize", "table", "markdown", "PlansBenchResult",
+           "outcomes_from_json"]
 
 PLANS = ("paper", "paper+greys", "adaptive")
 HIDDEN_COLOURS = 300
@@ -460,7 +461,12 @@ def main(argv=None) -> int:
     parser.add_argument("--first-seed", type=int, default=FIRST_SEED)
     parser.add_argument("--json", metavar="FILE")
     parser.add_argument("--markdown", action="store_true")
+    parser.add_argument("--load", nargs="+", metavar="FILE",
+                        help="pool the sessions of earlier --json files instead of measuring")
     args = parser.parse_args(argv)
+    if args.load:
+        print(PlansBenchResult(outcomes_from_json(args.load), args.markdown).summary())
+        return 0
     outcomes = run_plans_bench(args.sessions, args.scenarios, first_seed=args.first_seed,
                                progress=lambda d, t, o: print(f"\r{d}/{t} {o.scenario} {o.plan}".ljust(60),
                                                               end="", file=sys.stderr, flush=True))

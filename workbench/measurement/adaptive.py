@@ -41,7 +41,9 @@ It stops when the best candidate's predicted improvement falls below
 :data:`FLOOR_DE00_PER_MIN` ΔE00 per minute, when the predicted held-out ΔE00
 reaches ``--target-dE00``, or when nothing more fits the budget
 (``--budget-min``; without it, :data:`PAPER_SHARE` of the time the ``paper``
-plan would take on this display, predicted by the same cost model). The stop
+plan would take on this display, predicted by the same cost model at the
+first decision, but never less than the core, the validation colours and
+:data:`MIN_ADAPTIVE_S` of decisions). The stop
 decision adds the validation colours (``--validation N``, default
 :data:`DEFAULT_VALIDATION`: seeded random colours, the ``paper`` plan's first
 N for the same seed, never read by the planner) and a last white; the budget
@@ -68,7 +70,7 @@ from workbench.measurement.plans import MeasurementPlan, Patch, measurement_plan
 from workbench.measurement.planning_model import PlanningModel, PlanningRows, planning_colours
 
 __all__ = ["ADAPTIVE_PLAN", "CORE_LEVELS", "CORE_GREYS", "DRIFT_REFERENCE_INTERVAL_S",
-           "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "PAPER_SHARE", "CHECKPOINT_GROWTH",
+           "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "PAPER_SHARE", "MIN_ADAPTIVE_S", "CHECKPOINT_GROWTH",
            "SWEEP_STEP", "GREY_STEP", "MIXTURE_CUBE", "AdaptiveSettings", "Decision", "PlanState",
            "AdaptivePlanner", "adaptive_core_plan", "plan_state", "replay_decisions",
            "validation_patches", "held_out_summary"]
@@ -96,6 +98,10 @@ DEFAULT_VALIDATION = 30
 
 PAPER_SHARE = 0.30
 """Without ``--budget-min``: the budget is this share of the ``paper`` plan's predicted time."""
+
+MIN_ADAPTIVE_S = 120.0
+"""Without ``--budget-min``, the budget leaves at least this long for decisions after the core (where
+the paper plan's predicted time would leave less: a display whose dark end the core underrates)."""
 
 CHECKPOINT_GROWTH = 1.25
 """The rows are diagnosed again once the fit rows have grown by this factor."""
@@ -360,7 +366,7 @@ class AdaptivePlanner:
             return float(cost.seconds(np.maximum(model.predict(rgb)[:, 1], 0.0)).sum())
 
         reserve = seconds(list(self.validation) + [Patch("white", _WHITE)])
-        budget = self._budget_s(decisions, seconds)
+        budget = self._budget_s(decisions, seconds, elapsed, reserve)
         common = dict(number=number, predicted_dE00=before, elapsed_s=elapsed, budget_s=budget,
                       measured_before=measured_before, findings=findings)
 
@@ -462,12 +468,13 @@ class AdaptivePlanner:
         patches = tuple(p for p in follow_up.patches if p.kind in ("grey", "mixture"))
         return findings, tuple((p, ", ".join(follow_up.serves)) for p in patches)
 
-    def _budget_s(self, decisions, seconds) -> float:
+    def _budget_s(self, decisions, seconds, elapsed: float, reserve: float) -> float:
         if self.settings.budget_min is not None:
             return 60.0 * float(self.settings.budget_min)
         if decisions and decisions[0].get("budget_s") is not None:
             return float(decisions[0]["budget_s"])
-        return PAPER_SHARE * seconds(list(measurement_plan_paper(self.settings.seed).patches))
+        return max(PAPER_SHARE * seconds(list(measurement_plan_paper(self.settings.seed).patches)),
+                   elapsed + reserve + MIN_ADAPTIVE_S)
 
     @staticmethod
     def _since_white_s(journal: Journal) -> float:
