@@ -172,6 +172,8 @@ namespace UnityEngine
         public static string streamingAssetsPath = "StreamingAssets";   // test double: settable
         public static string persistentDataPath = "PersistentData";
         public static bool isPlaying = true;
+        public static bool runInBackground;                              // VrPatchServer
+        public static string unityVersion = "2021.3.0f1 (test double)";
     }
 
     public static class Time
@@ -498,7 +500,15 @@ namespace UnityEngine
         public bool enabled { get; set; } = true;
     }
 
-    public class MonoBehaviour : Behaviour { }
+    public class MonoBehaviour : Behaviour
+    {
+        // VrPatchServer: coroutines are compiled, never run here
+        public Coroutine StartCoroutine(System.Collections.IEnumerator routine) { return new Coroutine(); }
+        public void StopAllCoroutines() { }
+    }
+
+    public sealed class Coroutine { }
+    public sealed class WaitForEndOfFrame { }
 
     public enum LightType { Spot = 0, Directional = 1, Point = 2 }
 
@@ -551,6 +561,8 @@ namespace UnityEngine
             return null;
         }
         public void SetActive(bool value) { activeSelf = value; }
+        public int layer { get; set; }                                   // VrPatchServer
+        public T[] GetComponents<T>() where T : Component { var found = new List<T>(); foreach (var c in components) if (c is T) found.Add((T)c); return found.ToArray(); }
         // test double: a primitive has a MeshRenderer and a Collider, as in Unity
         public static GameObject CreatePrimitive(PrimitiveType type)
         {
@@ -785,6 +797,41 @@ namespace UnityEngine
     public class Camera : Behaviour
     {
         public static Camera main { get; set; }
+        // VrPatchServer's patch camera
+        public static Camera[] allCameras { get { return new Camera[0]; } }
+        public CameraClearFlags clearFlags { get; set; }
+        public Color backgroundColor { get; set; }
+        public int cullingMask { get; set; } = -1;
+        public float depth { get; set; }
+        public bool allowHDR { get; set; } = true;
+        public bool allowMSAA { get; set; } = true;
+        public bool allowDynamicResolution { get; set; }
+        public bool useOcclusionCulling { get; set; } = true;
+        public float nearClipPlane { get; set; } = 0.3f;
+        public float farClipPlane { get; set; } = 1000f;
+        public StereoTargetEyeMask stereoTargetEye { get; set; } = StereoTargetEyeMask.Both;
+    }
+
+    public enum CameraClearFlags { Skybox = 1, SolidColor = 2, Depth = 3, Nothing = 4 }
+    [Flags] public enum StereoTargetEyeMask { None = 0, Left = 1, Right = 2, Both = 3 }
+
+    public struct Bounds
+    {
+        public Vector3 center, size;
+        public Bounds(Vector3 center, Vector3 size) { this.center = center; this.size = size; }
+    }
+
+    public sealed class Mesh : Object
+    {
+        public Vector3[] vertices { get; set; }
+        public Vector2[] uv { get; set; }
+        public int[] triangles { get; set; }
+        public Bounds bounds { get; set; }
+    }
+
+    public sealed class MeshFilter : Component
+    {
+        public Mesh sharedMesh { get; set; }
     }
 
     public struct Ray
@@ -849,6 +896,11 @@ namespace UnityEngine.XR
         public bool isValid { get { return false; } }
         public string name { get { return ""; } }
         public bool TryGetFeatureValue(InputFeatureUsage<bool> usage, out bool value) { value = false; return false; }
+    }
+
+    public static class XRSettings
+    {
+        public static string loadedDeviceName = "";                      // VrPatchServer; test double: settable
     }
 
     public static class InputDevices
