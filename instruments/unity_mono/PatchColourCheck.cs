@@ -129,7 +129,7 @@ namespace VrColourWorkbench.MonoHost
                         }
                         allExact &= exact == cases;
                         Console.WriteLine(string.Format(CultureInfo.InvariantCulture,
-                            "{0} project, shader {1}, encode {2}: {3}/{4} exact, smallest margin {5:F4} DAC{6}",
+                            "{0} project, shader {1}, encode {2}: {3}/{4} exact, smallest margin {5:F6} DAC{6}",
                             linear ? "Linear" : "Gamma", precision, linear ? encode : "none (UNORM)", exact, cases, margin,
                             firstWrong == null ? "" : "; first wrong: " + firstWrong));
                     }
