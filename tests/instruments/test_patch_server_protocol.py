@@ -350,7 +350,7 @@ def test_a_second_client_is_told_who_is_served_and_closed_while_the_first_keeps_
 def test_the_busy_line_names_the_address_alone_before_hello(server):
     with Client(server.address) as first:
         first_address = "%s:%s" % first.sock.getsockname()[:2]
-        time.sleep(0.1)  # connected, said nothing yet
+        assert first.request({"cmd": "show", "id": 1, "rgb": [1, 1, 1]})["ok"] is True  # served, no hello yet
         with Client(server.address) as second:
             assert json.loads(second.line())["error"].startswith(
                 f"busy: this patch server is serving {first_address} \u2014 one client")
