@@ -490,6 +490,11 @@ class TcpPatchDisplay:
                 f"the patch server at {self.where} answered {line[:80]!r}, which is not JSON; "
                 f"it must follow {PATCH_PROTOCOL} (see instruments.patch_display)"
             ) from None
+        if (isinstance(reply, dict) and reply.get("id") is None and reply.get("ok") is False
+                and str(reply.get("error", "")).startswith("busy:")):
+            raise PatchDisplayError(
+                f"the patch server at {self.where} turned this connection away with {reply['error']!r}"
+            )
         if not isinstance(reply, dict) or reply.get("id") != message["id"]:
             raise PatchDisplayError(
                 f"the patch server at {self.where} answered {reply!r} to request id {message['id']}; "

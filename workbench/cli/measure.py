@@ -627,12 +627,8 @@ def _aim(kind: str, display, eye: str, ctrl_c: "_CtrlCCancels") -> None:
     if DISPLAY_KINDS[kind].target == "nothing to aim":
         print("measure: --target: the simulated headset has nothing to aim at; measuring", file=sys.stderr)
         return
-    shown = display
-    if getattr(display, "target", None) is None and hasattr(display, "_display"):
-        # measure_window.WorkerPatchDisplay has no target() yet: its QtPatchDisplay (the window) draws it.
-        shown = display._display
     try:
-        show_target(shown, eye)
+        show_target(display, eye)
     except PatchDisplayError as error:
         raise WorkbenchError(str(error)) from None
     where = "" if eye == "both" else f" in the {eye} eye"

@@ -8,8 +8,9 @@
 - :mod:`.level2_files`: level-2 coefficient textures, basis, per-light matrices; K chosen
   for texel-exact runtime output.
 - ``runtime/``: package data copied into every bundle: ``reference_consumer.py`` (numpy +
-  json only), ``VrColourBundle.cs`` (Unity), ``Level2Relight.hlsl``,
-  ``level2_relight.frag``/``.vert`` (GLSL 4.30) and the bundle README template.
+  json only), ``level2_relight.frag``/``.vert`` (GLSL 4.30), the bundle README template and
+  ``unity/``, the Unity package (loader ``VrColourBundle.cs``, components, the patch server,
+  shaders incl. ``Level2Relight.hlsl``, the Lightbooth sample), copied whole as ``runtime/unity/``.
 """
 
 from __future__ import annotations

@@ -108,6 +108,10 @@ class WorkerPatchDisplay:
         """Show ``rgb_dac`` (as ``window`` of the screen on ``surround``); return once painted."""
         self._display.show(rgb_dac, window=window, surround=surround)
 
+    def target(self, eye: str = "both") -> None:
+        """Draw the centring target in the window until the next patch (``measure --target``)."""
+        self._display.target(eye)
+
     def close(self) -> None:
         """Nothing: the window belongs to whoever opened it."""
 
