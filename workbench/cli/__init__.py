@@ -30,6 +30,7 @@ COMMAND_MODULES = (
     "workbench.cli.ishihara",
     "workbench.cli.export",
     "workbench.cli.gui",
+    "workbench.cli.vr",
 )
 
 

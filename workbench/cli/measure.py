@@ -126,6 +126,7 @@ from workbench.measurement.runner import (
     format_duration,
 )
 from workbench.measurement.simulation import open_simulated_instrument
+from workbench.vr import patch_display as webxr_display
 from workbench.measurement.adaptive import (
     ADAPTIVE_PLAN,
     AdaptivePlanner,
@@ -308,6 +309,8 @@ DISPLAY_KINDS = {
         DisplayKind("value-shot", "value-shot:HOST:PORT", "value-shot:127.0.0.1:8890", _host_port_only,
                     _open_value_shot, apl=False, eyes_refusal=_AUTHORS_NO_EYES,
                     target="the authors' Unreal convention (value-shot) has no centring target"),
+        DisplayKind("webxr", webxr_display.SYNTAX, webxr_display.EXAMPLE, webxr_display.parse_address,
+                    webxr_display.open_display, eyes=True),  # a headset's browser (workbench.vr)
     )
 }
 """The patch displays ``--display`` names, by their prefix; :func:`parse_display` dispatches on it."""
