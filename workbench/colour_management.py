@@ -227,7 +227,7 @@ def authored_srgb8(reflectances, *, wavelengths=None) -> np.ndarray:
 class ErrorTable:
     """Engine output vs theory for one source and level (the paper's Table 4, plus ΔE00).
 
-    ``mean_abs``/``sd`` are per channel (R, G, B) of |engine − round(DAC_t)|
+    ``mean_abs``/``sd`` are per channel (R, G, B) of ``|engine − round(DAC_t)|``
     in DAC counts; ``dE00`` figures compare what the HMD shows with ``XYZ_t``
     in CIELAB relative to ``XYZ_t`` of the perfect diffuser under the source.
     """

@@ -5,7 +5,7 @@
   manufacturer's values and the paper's "Measured" column.
 - Table 3: the four sources (CIE D65, the LED D65 simulator, the two-peak D65
   metamer, CIE D50): Rf, CCT, xy, XYZ at k = 0.85, sRGB light colour.
-- Table 4: mean ± sd of |ΔR|, |ΔG|, |ΔB| between the engine output and the
+- Table 4: mean ± sd of ``|ΔR|``, ``|ΔG|``, ``|ΔB|`` between the engine output and the
   theoretical ``DAC_t``, per source, at level 1 (texture = the manufacturer's
   sRGB, as the paper's scanned texture) and level 2 (texels recomputed from
   the spectra for the source), on the ideal sRGB display as in the paper.
@@ -83,7 +83,7 @@ PAPER_TABLE4 = {
     ("d65-two-peak", 2): ((0.5, 0.4, 0.5), (0.5, 0.5, 0.5)),
     ("cie-d50", 2): ((0.1, 0.4, 1.2), (0.3, 0.5, 0.9)),
 }
-"""Table 4 of the paper: (source, level) → (mean |ΔR,ΔG,ΔB|, sd)."""
+"""Table 4 of the paper: (source, level) → (mean ``|ΔR,ΔG,ΔB|``, sd)."""
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,7 @@ builds the whole model from it. So the exported model is chosen among
 :data:`MODEL_CANDIDATES` by the same K-fold cross-validation of the fit rows
 (same folds, same per-group mean ΔE00; the validation rows are never read):
 
+=====================  ========================================
 ``baseline``           the paper's gamma + 3×3;
 ``extension``          the extension with the terms selection kept (where it has any);
 ``grey-ramp``          the authors' grey-ramp linearisation, exportable;
@@ -17,6 +18,7 @@ builds the whole model from it. So the exported model is chosen among
 ``power-limit``        where the diagnosis found the sweeps' bend to be a power limit's
                        (:mod:`workbench.diagnostics.power_limit`): power laws of the undimmed
                        outputs and one load gain.
+=====================  ========================================
 
 The grey-ramp candidates exist where the fit rows hold at least
 :data:`~workbench.diagnostics.authors.MIN_GREYS` grey levels. Where

@@ -7,6 +7,7 @@ registry :data:`TONE_CURVES` and :func:`fit_tone_curve` pick one by name, and
 
 Forms
 -----
+==================  ========================================
 ``power``           ``L = d^γ`` (the paper's).
 ``gog``             gain-offset-gamma, ``L = max(0, (1 − o)·d + o)^γ``: a negative
                     offset ``o`` is a black crush (toe), a positive one a lifted black.
@@ -17,6 +18,7 @@ Forms
 ``linear``          the same points joined by straight lines (the seed authors' grey-ramp
                     linearisation interpolates this way; PCHIP overshoots between two
                     nearly coincident levels, which real charts hold).
+==================  ========================================
 
 References
 ----------

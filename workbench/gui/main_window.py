@@ -102,8 +102,8 @@ class MainWindow(QMainWindow):
         others are built one per event-loop turn after it (or at once when
         shown), so that the window appears quickly.
 
-    Signals
-    -------
+    Attributes
+    ----------
     file_loaded(object)
         A file opened with :meth:`open_path` was read, diagnosed and applied.
     error(str)

@@ -64,8 +64,8 @@ class CallWorker(QThread):
 class MeasurementWorker(QThread):
     """Runs a calibration (:func:`~workbench.gui.calibration_setup.open_run`) and emits each runner event.
 
-    Signals
-    -------
+    Attributes
+    ----------
     event(object)
         Each event of :meth:`MeasurementRun.events` (``RunStarted`` …
         ``RunFinished``), in order.

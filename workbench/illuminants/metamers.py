@@ -25,13 +25,13 @@ from workbench.illuminants.synthesized import TWO_PEAK_BLUE_NM, TWO_PEAK_FWHM_NM
 __all__ = ["METAMER_XY_TOLERANCE", "two_peak_metamer"]
 
 METAMER_XY_TOLERANCE = 1e-6
-"""Largest |Δx|, |Δy| between a metamer and its source."""
+"""Largest ``|Δx|``, ``|Δy|`` between a metamer and its source."""
 
 _BLUE_CANDIDATES_NM = (TWO_PEAK_BLUE_NM, 440.0, 460.0, 430.0, 470.0, 480.0)
 
 
 def two_peak_metamer(illuminant: Illuminant, fwhm_nm: float = TWO_PEAK_FWHM_NM) -> Illuminant:
-    """A two-peak LED source with the chromaticity of ``illuminant`` (|Δxy| ≤ 1e-6).
+    """A two-peak LED source with the chromaticity of ``illuminant`` (``|Δxy|`` ≤ 1e-6).
 
     Raises
     ------

@@ -2,7 +2,7 @@
 
 - ``d65-two-peak``: two narrow LED peaks, a fixed blue one and a yellow one
   whose wavelength and power are solved so that the chromaticity equals D65's
-  (|Δxy| < 1e-6). Like the paper's Rf 3.2 source: white looks right, reds and
+  (``|Δxy|`` < 1e-6). Like the paper's Rf 3.2 source: white looks right, reds and
   greens cannot be rendered.
 - ``d65-simulator``: six LED channels at common commercial peak wavelengths
   (the paper's lightbooth has six), their powers fitted (non-negative least

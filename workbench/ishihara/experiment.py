@@ -141,7 +141,7 @@ class Table5Row:
     full_band_texel : (int, int, int)
         The full-band reference texel (:func:`~workbench.colour_management.level2_texture`).
     texel_difference : int
-        Largest |basis − full band| texel difference, counts, over both models.
+        Largest ``|basis − full band|`` texel difference, counts, over both models.
     paper_calculated, paper_measured : (float, float, float) or None
         The paper's Table 5 values (None for our designed colours).
     paper_dE00 : float or None
@@ -191,7 +191,7 @@ class Table5:
     basis_components : (int, int)
         K of the bases fitted to the paper-coloured and the designed plate's cube.
     max_texel_difference : int
-        Largest |basis path − full band| texel difference over every row and
+        Largest ``|basis path − full band|`` texel difference over every row and
         both models (counts).
     """
 
@@ -474,7 +474,7 @@ class Table6Row:
 
     @property
     def max_contrast_change_jnd(self) -> float:
-        """Largest |figure–ground contrast here − on the real plates| over the plates (JND)."""
+        """Largest ``|figure–ground contrast here − on the real plates|`` over the plates (JND)."""
         if not self.physical_contrasts_jnd:
             return 0.0
         return float(np.max(np.abs(np.subtract(self.contrasts_jnd, self.physical_contrasts_jnd))))

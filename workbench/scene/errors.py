@@ -1,7 +1,7 @@
 """The per-patch error table beside the scene: the paper's Table 4, patch by patch, for any source and profile.
 
 For each ColorChecker patch and each level: the engine output (DAC) against
-the theoretical ``round(DAC_t)`` (|ΔR|, |ΔG|, |ΔB| in counts) and the CIEDE2000
+the theoretical ``round(DAC_t)`` (``|ΔR|``, ``|ΔG|``, ``|ΔB|`` in counts) and the CIEDE2000
 between what the headset shows and ``XYZ_t`` (CIELAB white: ``XYZ_t`` of the
 perfect diffuser under the source). The summary rows are
 :func:`workbench.colour_management.error_table`, computed exactly as

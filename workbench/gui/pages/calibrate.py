@@ -69,8 +69,8 @@ _FORM_MIN_WIDTH = 300
 class CalibratePage(QWidget):
     """The guided calibration.
 
-    Signals
-    -------
+    Attributes
+    ----------
     run_finished(object)
         The run's :class:`~workbench.measurement.runner.RunSummary`.
     session_loaded()

@@ -60,8 +60,8 @@ _BOTTOM_PLOT_MIN_WIDTH = 160
 class DiagnosePage(QWidget):
     """The diagnosis of the workspace's session; updates on ``diagnosis-changed``.
 
-    Signals
-    -------
+    Attributes
+    ----------
     follow_up_requested(object, object)
         The follow-up's plan file (a Path) and the measurement directory to
         measure it into (a Path), or None where the session has none.

@@ -106,8 +106,8 @@ def export_summary_html(document: dict | None, path=None, size: int | None = Non
 class ExportPage(QWidget):
     """Choose where, write the profile, see the document that was written.
 
-    Signals
-    -------
+    Attributes
+    ----------
     exported(object)
         The path of the profile written.
     bundle_written(object)

@@ -27,8 +27,8 @@ _NONE = QBrush()
 class PatchTable(QWidget):
     """One row per patch of the plan.
 
-    Signals
-    -------
+    Attributes
+    ----------
     remeasure(list)
         The plan indices the user asked to measure again (selected rows, or
         the failed ones).
