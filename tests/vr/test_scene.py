@@ -126,6 +126,7 @@ def test_the_window_shows_the_scene_without_a_headset(browser, vive_bundle):
         page.wait("vrWorkbench.state().connected")
         state = page.state()
         assert not state["immersive"] and not state["problem"]
+        assert state["xrNote"].startswith("This browser offers no immersive VR session here")
         shot = page.page.screenshot()
         from io import BytesIO
 

@@ -340,7 +340,8 @@ async function start() {
   const supported = navigator.xr && await navigator.xr.isSessionSupported('immersive-vr').catch(() => false);
   $('enter-vr').disabled = !supported;
   if (!supported) {
-    problem(window.isSecureContext
+    $('xr-note').hidden = false;
+    $('xr-note').textContent = (window.isSecureContext
       ? 'This browser offers no immersive VR session here (no headset, or WebXR is off): the lightbooth shows in this window only.'
       : 'WebXR needs a secure context: open the page as http://localhost:PORT (adb reverse for a Quest on USB) or over HTTPS (vr serve --tls); see docs/vr/webxr.md.');
   }
@@ -360,7 +361,8 @@ function testApi() {
     ready: false,
     state: () => ({ connected: Boolean(state.socket && state.connection), refused: state.refused,
       immersive: Boolean(state.session), eyes: state.eyes, patches: state.patchClient,
-      scene: { ...state.scene }, frame: state.frame, problem: $('problem').hidden ? '' : $('problem').textContent }),
+      scene: { ...state.scene }, frame: state.frame, problem: $('problem').hidden ? '' : $('problem').textContent,
+      xrNote: $('xr-note').hidden ? '' : $('xr-note').textContent }),
     lights: () => state.bundle ? state.bundle.lights : [],
     // The level-2 texels of the lightbooth cube under light `id`, RGBA, base64, top row first.
     level2Texels: (id) => ({ width: relight.width, height: relight.height, rgba: base64(relight.read(id)) }),

@@ -243,17 +243,17 @@ export function atlasTextureFromImage(gl, bitmap) {
   return texture;
 }
 
-// The window's camera: in front of the opening, the whole booth in view (as the Scene page's).
+// The window's camera: in front of the opening, the whole booth and its buttons in view.
 export function windowCamera(aspect) {
   const { height: H, depth: D, floorY: y0, frontZ: zf, width: W } = BOOTH;
   const fovy = 40 * Math.PI / 180;
   const half = Math.tan(fovy / 2);
   const centreZ = zf - D / 2;
-  const distance = Math.max(D * 2.2, D / 2 + 0.9 * (W / 2) / (half * aspect));
-  const eye = [0, y0 + H * 0.5, centreZ + distance];
+  const distance = Math.max(D * 3, D / 2 + 0.65 * W / (half * aspect));
+  const eye = [0, y0 + H * 0.55, centreZ + distance];
   return {
     projection: mat4.perspective(fovy, aspect, 0.05, 20),
-    view: mat4.lookAt(eye, [0, y0 + H * 0.45, zf - D], [0, 1, 0]),
+    view: mat4.lookAt(eye, [0, y0 + H * 0.32, centreZ], [0, 1, 0]),
     eye,
   };
 }
