@@ -185,3 +185,17 @@ def test_a_page_that_leaves_vr_stops_the_display_with_a_message(browser):
             display.show([10, 20, 30])
         display.close()
         page.close()
+
+
+def test_the_displays_own_eye_goes_with_every_patch_and_the_target(headset):
+    display, _ = headset
+    display.eye = "right"  # as measure --eye right opens it
+    try:
+        display.show([90, 180, 45])
+        assert_full_field(display, [90, 180, 45], eyes=("right",))
+        display.target()
+        seen = views(display)
+        assert seen["left"] == {(0, 0, 0): (EYE_PX * EYE_PX, (0, 0, EYE_PX - 1, EYE_PX - 1))}
+        assert set(seen["right"]) == {(0, 0, 0), (255, 255, 255)}
+    finally:
+        display.eye = "both"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import http.client
 import json
 import ssl
+from pathlib import Path
 
 import pytest
 
@@ -118,3 +119,33 @@ def test_access_rules():
     assert not local.origin_allowed("http://127.0.0.1:6", "127.0.0.1:5")
     assert not local.origin_allowed(None, "127.0.0.1:5")
     assert local.host_allowed("[::1]:5") and not local.host_allowed("rebound.example:5")
+
+
+def test_vr_serve_prints_the_url_and_qr_code_and_stops_on_ctrl_c(tmp_path, vive_bundle):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    import urllib.request
+
+    from tests.vr.conftest import free_port, wait_listening
+
+    port = free_port()
+    root = Path(__file__).resolve().parents[2]
+    process = subprocess.Popen([sys.executable, "-m", "workbench", "vr", "serve", "--port", str(port),
+                                "--bundle", str(vive_bundle), "--source", "cie-fl11", "--level", "1"],
+                               cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, "PYTHONIOENCODING": "utf-8"})
+    try:
+        wait_listening(port)
+        scene = json.loads(urllib.request.urlopen(f"http://127.0.0.1:{port}/scene.json", timeout=10).read())
+        assert scene["scene"] == {"source": "cie-fl11", "level": 1}
+        time.sleep(0.2)
+    finally:
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=20)
+    assert process.returncode == 0, err
+    assert f"Open http://127.0.0.1:{port}/ in the headset's browser (or scan):" in out
+    assert "▀" in out or "█" in out  # the QR code
+    assert "Lightbooth of" in out and "cie-d65, cie-fl11" in out
