@@ -7,7 +7,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= demo-out
 
-.PHONY: demo test lint setup system-packages clean
+.PHONY: demo test lint docs setup system-packages clean
 
 setup: $(STAMP)
 
@@ -38,8 +38,15 @@ demo: system-packages $(STAMP)
 lint: $(STAMP)
 	$(VENV)/bin/lint-imports
 
-test: system-packages $(STAMP) lint
+# The documentation site (docs/, Sphinx + MyST + numpydoc) into docs/_build/html,
+# read afresh (-E) with warnings as errors: a broken link or reference, or a
+# docstring that does not parse, fails it. The API pages are regenerated.
+docs: $(STAMP)
+	rm -rf docs/api/generated
+	$(PY) -m sphinx -b html -E -W --keep-going -q -j auto docs docs/_build/html
+
+test: system-packages $(STAMP) lint docs
 	$(PY) -m pytest -q
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .import_linter_cache
+	rm -rf $(VENV) $(OUT) .pytest_cache .import_linter_cache docs/_build docs/api/generated
