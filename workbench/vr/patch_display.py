@@ -62,6 +62,8 @@ class WebXRPatchDisplay:
         What the page is told is using it (shown on the page).
     own_server : bool
         Close ``server`` with the display.
+    cancel : threading.Event, optional
+        Set it to stop waiting for the page (a GUI's Cancel); the display then raises as on a timeout.
     eye : str
         Which eye's panel shows the patches (:data:`~instruments.patch_display.EYES`; the other
         is black); sent with every ``show`` and ``target`` when not ``"both"``.
@@ -74,7 +76,7 @@ class WebXRPatchDisplay:
 
     def __init__(self, server: WebXRServer, *, timeout_s: float = 10.0,
                  page_timeout_s: float = DEFAULT_PAGE_TIMEOUT_S, client: str = "vr-workbench",
-                 own_server: bool = False, eye: str = "both"):
+                 own_server: bool = False, eye: str = "both", cancel=None):
         if not timeout_s > 0 or not page_timeout_s > 0:
             raise ValueError("timeout_s and page_timeout_s must be positive numbers of seconds")
         self.eye = validate_eye(eye)
@@ -87,7 +89,7 @@ class WebXRPatchDisplay:
         self.last_reply: dict | None = None
         server.attach_patches(client)
         try:
-            self.page = server.wait_for_page(page_timeout_s, immersive=True)
+            self.page = server.wait_for_page(page_timeout_s, immersive=True, cancel=cancel)
         except TimeoutError as error:
             self.close()
             raise PatchDisplayError(

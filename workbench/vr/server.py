@@ -380,7 +380,9 @@ class WebXRServer:
                 if page.connected and (page.immersive or not immersive):
                     return page
                 remaining = deadline - time.monotonic()
-                if remaining <= 0 or (cancel is not None and cancel.is_set()):
+                if cancel is not None and cancel.is_set():
+                    raise TimeoutError(f"stopped waiting for a page at {self.url} (cancelled)")
+                if remaining <= 0:
                     if page.connected:
                         raise TimeoutError(f"{page.describe()} is connected but did not enter VR within "
                                            f"{timeout_s:g} s (press Enter VR on the page)")
