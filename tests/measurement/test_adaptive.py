@@ -199,3 +199,24 @@ def test_bench_plans_prints_its_table(capsys):
     for plan in ("paper", "paper+greys", "adaptive"):
         assert plan in printed
     assert "acceptance over 2 displays" in printed
+
+
+def test_no_fold_holds_every_white():
+    """An adaptive session's few whites can all fall in one cross-validation fold; that fold's
+    training set would have no white, and a candidate fitted to the white (the power limit) could
+    not be cross-validated at all (a knee display was exported with the wrong model for it)."""
+    from workbench.diagnostics.cross_validation import FOLDS, fold_of_rows
+
+    rgb = np.zeros((4 * FOLDS, 3))
+    rgb[:, 0] = np.arange(4 * FOLDS) + 10  # red sweep points, free rows
+    rgb[::FOLDS] = 255  # every white lands in fold 0
+    class Rows(SimpleNamespace):
+        def __len__(self):
+            return len(self.rgb)
+
+    context = SimpleNamespace(raw=Rows(rgb=rgb), copies=np.zeros(len(rgb), bool))
+    fold = fold_of_rows(context)
+    white = np.all(rgb >= 255, axis=1)
+    for k in range(FOLDS):
+        assert (white & (fold != k)).any(), f"fold {k}'s training set has no white"
+    assert (fold >= 0).sum() >= len(rgb) - 1  # one white kept in every training set, no more
