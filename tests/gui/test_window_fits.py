@@ -1,7 +1,8 @@
 """The window at its default size and at 1366 × 768: nothing clipped, no sideways scrolling.
 
 The Calibrate form fits its column (every button's whole text, every list's current entry, the
-estimate wrapped; no horizontal scrollbar); on Fit & diagnose the findings column does not scroll
+estimate wrapped; no horizontal scrollbar; with each patch display, the headset's browser's URL, QR code
+and state included, and with the adaptive plan's settings); on Fit & diagnose the findings column does not scroll
 sideways and what was checked and not found is a table (effect, z against the critical value,
 statistic ± SE, impact, in the model or why not; the evidence as each row's tooltip); the Export page
 opens on a summary of what was written with its validation figures, the JSON one click away.
@@ -101,12 +102,15 @@ def _right_edge(widget, ancestor) -> int:
     return widget.mapTo(ancestor, widget.rect().topRight()).x()
 
 
-@pytest.mark.parametrize("display", ["simulated", "window", "tcp", "rgb-text", "value-shot"])
+@pytest.mark.parametrize("plan", ["paper", "adaptive"])
+@pytest.mark.parametrize("display", ["simulated", "window", "tcp", "rgb-text", "value-shot", "webxr"])
 @pytest.mark.parametrize("size", SIZES)
-def test_the_calibrate_form_fits_its_column_with_every_text_whole(window, size, display):
+def test_the_calibrate_form_fits_its_column_with_every_text_whole(window, size, display, plan):
     page = window.pages["calibrate"]
     form = page.form
+    form.webxr_address.setText("127.0.0.1:0")  # a free port, should the headset's browser be chosen
     form.display.setCurrentIndex(form.display.findData(display))
+    form.plan.setCurrentIndex(form.plan.findData(plan))
     _settle(window, "calibrate", size)
     scroll = page.form_scroll
     viewport = scroll.viewport()
@@ -119,6 +123,18 @@ def test_the_calibrate_form_fits_its_column_with_every_text_whole(window, size, 
     assert "Find CS-2000" in texts
     assert ("Identify screens" in texts) == (display == "window")  # only the chosen display's settings
     assert ("Test connection" in texts) == (display == "tcp")
+    assert ("Stop server" in texts) == (display == "webxr")  # choosing the headset's browser serves its page
+    if display == "webxr":  # its URL, QR code and state beside the progress, whole
+        panel = page.headset
+        assert panel.isVisible() and panel.qr.isVisible() and window.headset_browser.server.url in panel.url.text()
+        for label in (panel.url, panel.state):
+            assert label.height() >= label.heightForWidth(label.width()), label.text()
+            assert _right_edge(label, page) <= page.width(), label.text()
+        assert _right_edge(panel.qr, page) <= page.width()
+    for field in (form.budget, form.target, form.validation):  # the adaptive plan's settings, with it only
+        assert field.isVisibleTo(form) == (plan == "adaptive")
+        if plan == "adaptive":
+            assert field.sizeHint().width() <= field.width() and _right_edge(field, form) <= viewport.width()
     for button in buttons:
         assert button.sizeHint().width() <= button.width(), button.text()  # the whole text shows
         assert _right_edge(button, form) <= viewport.width(), button.text()

@@ -4,12 +4,15 @@
 :func:`open_run` turns it into a :class:`~workbench.measurement.runner.MeasurementRun`
 wired the way ``measure`` wires it (the simulated headset measured by the
 CS-2000 emulator on a pty, or a real CS-2000; the simulated headset, a
-full-screen patch window, a VR application's patch server, or a Unity or
-Unreal project following the seed authors' conventions; the panel of one eye
+full-screen patch window, a VR application's patch server, a headset's
+browser (the WebXR page of :mod:`workbench.vr`), or a Unity or Unreal
+project following the seed authors' conventions; the panel of one eye
 or both; the instrument's sync), a new session or the resumption of the one
 journaled in the output directory.
 :func:`plan_estimate` says how many patches a plan has and how long the
-instrument would take, before anything starts.
+instrument would take, before anything starts; :func:`adaptive_estimate` says
+what the adaptive plan starts from and the budget it grows within (it is
+given its planner, as ``measure --plan adaptive`` is).
 
 This module imports no Qt: a test or a script drives a calibration with it
 exactly as the window does.
@@ -35,13 +38,23 @@ from instruments.patch_display import (
     TcpPatchDisplay,
 )
 from workbench.errors import InputError, WorkbenchError
+from workbench.measurement.adaptive import (
+    ADAPTIVE_PLAN,
+    DEFAULT_VALIDATION,
+    PAPER_SHARE,
+    AdaptivePlanner,
+    AdaptiveSettings,
+    adaptive_core_plan,
+)
 from workbench.measurement.journal import read_journal
 from workbench.measurement.plans import MEASUREMENT_PLANS, MeasurementPlan, measurement_plan, read_plan_file
 from workbench.measurement.runner import JOURNAL_NAME, MeasurementRun
 from workbench.measurement.simulation import modelled_plan_duration_s, open_simulated_instrument
+from workbench.vr.server import DEFAULT_PORT as WEBXR_DEFAULT_PORT
 
 __all__ = ["SIMULATED", "DISPLAY_KINDS", "ENGINE_DEFAULT_ADDRESSES", "ONE_EYE_DISPLAYS", "SYNC_CHOICES",
-           "PLAN_DESCRIPTIONS", "CalibrationSetup", "PlanEstimate", "plan_estimate",
+           "PLAN_DESCRIPTIONS", "PLAN_NAMES", "WEBXR_DEFAULT_ADDRESS", "CalibrationSetup", "PlanEstimate",
+           "plan_estimate", "AdaptiveEstimate", "adaptive_estimate",
            "cs2000_ports", "planned", "open_run", "check_tcp_display"]
 
 SIMULATED = "simulated"
@@ -53,14 +66,19 @@ DISPLAY_KINDS = {
     "tcp": "VR application (TCP patch protocol)",
     "rgb-text": "Unity project (R,G,B text)",
     "value-shot": "Unreal project (Value/SHOT)",
+    "webxr": "headset browser (WebXR)",
 }
 """Patch display kind → how the form names it."""
 
 ENGINE_DEFAULT_ADDRESSES = {"rgb-text": ("127.0.0.1", 55001), "value-shot": ("127.0.0.1", 8890)}
 """Where the authors' Unity and Unreal projects listen (``ConnectionUnity.m``, ``ConnectionUnreal.m``)."""
 
-ONE_EYE_DISPLAYS = ("simulated", "tcp")
+ONE_EYE_DISPLAYS = ("simulated", "tcp", "webxr")
 """The displays that can show a patch to one eye (the simulation records it)."""
+
+WEBXR_DEFAULT_ADDRESS = ("127.0.0.1", WEBXR_DEFAULT_PORT)
+"""Where the WebXR page is served by default (loopback: a PC headset's browser, or a Quest over USB
+with ``adb reverse``); another interface adds a token to the URL and HTTPS (:mod:`workbench.vr.security`)."""
 
 SYNC_CHOICES = {"none": "no sync", "internal": "internal, at the panel's refresh rate", "external": "external"}
 """The CS-2000's sync modes as the form names them."""
@@ -74,8 +92,14 @@ PLAN_DESCRIPTIONS = {
     "apl": "windows on surrounds",
     "paper+apl": "with the APL block",
     "authors-2024": "the authors' own protocol with a grey ramp",
+    ADAPTIVE_PLAN: "a small core, then each next patch chosen by the held-out error it removes per second "
+                   "of instrument time",
 }
 """What a built-in plan is, in words (the Calibrate form's estimate says it; the plan list only names it)."""
+
+PLAN_NAMES = (*MEASUREMENT_PLANS, ADAPTIVE_PLAN)
+"""The plans the form lists: the fixed ones (:data:`~workbench.measurement.plans.MEASUREMENT_PLANS`)
+and the adaptive plan (:mod:`workbench.measurement.adaptive`), which grows as it measures."""
 
 _INSTRUMENT_TIMEOUT_S = 10.0  # design §6: read timeout at least 10 s
 _DISPLAY_TIMEOUT_S = 10.0
@@ -130,6 +154,15 @@ class CalibrationSetup:
     sync : str
         The CS-2000's sync: ``none``, ``internal:HZ`` (20-200 Hz) or
         ``external``. A resumed session keeps its own.
+    webxr_address : (str, int) or None
+        For ``webxr``: where the page is served when :func:`open_run` is given
+        no running server (a script; the window shares one server).
+    budget_min, target_dE00 : float or None
+        For the ``adaptive`` plan: the instrument time the session may take
+        (None: :data:`~workbench.measurement.adaptive.PAPER_SHARE` of the
+        paper plan's) and the predicted held-out ΔE00 to stop at (None: no target).
+    validation : int
+        For the ``adaptive`` plan: validation colours measured at the end.
     """
 
     out_dir: Path
@@ -149,6 +182,10 @@ class CalibrationSetup:
     settle_s: float = RGB_TEXT_DEFAULT_SETTLE_S
     eye: str = "both"
     sync: str = "none"
+    webxr_address: tuple | None = None
+    budget_min: float | None = None
+    target_dE00: float | None = None
+    validation: int = DEFAULT_VALIDATION
 
     def __post_init__(self):
         simulated = self.instrument == SIMULATED
@@ -157,6 +194,9 @@ class CalibrationSetup:
         if self.display == "simulated" and not simulated:
             raise InputError("a real CS-2000 cannot measure the simulated headset; show the patches in a "
                              "full-screen window or a VR application")
+        if self.display == "webxr" and not self.webxr_address:
+            raise InputError("the headset browser (WebXR) needs the address to serve its page on "
+                             "(e.g. 127.0.0.1:47900)")
         if self.display == "tcp" and not self.tcp_address:
             raise InputError("the TCP patch display needs a host and a port (e.g. 127.0.0.1:47800)")
         if self.display in ENGINE_DEFAULT_ADDRESSES and not self.engine_address:
@@ -182,9 +222,11 @@ class CalibrationSetup:
             raise InputError(f"unknown headset effect {unknown[0]!r}; known: {', '.join(HEADSET_EFFECTS)}")
         if self.time_scale < 0:
             raise InputError(f"time scale {self.time_scale} is negative; give 0 (no waiting) to 1 (real timing)")
-        if self.plan_name != "file" and self.plan_name not in MEASUREMENT_PLANS:
+        if self.plan_name != "file" and self.plan_name not in PLAN_NAMES:
             raise InputError(f"unknown plan {self.plan_name!r}; choose one of "
-                             f"{', '.join(sorted(MEASUREMENT_PLANS))} or a plan file")
+                             f"{', '.join(sorted(PLAN_NAMES))} or a plan file")
+        if self.plan_name == ADAPTIVE_PLAN:
+            self.adaptive_settings(0)  # the budget, target and validation count are checked here
         if self.plan_name == "file" and not self.plan_file:
             raise InputError("choose a plan file (CSV with columns kind,r,g,b)")
 
@@ -197,7 +239,25 @@ class CalibrationSetup:
         if self.plan_name == "file":
             return read_plan_file(self.plan_file)
         seed = seed if seed is not None else self.seed
+        if self.plan_name == ADAPTIVE_PLAN:
+            return adaptive_core_plan(0 if seed is None else seed)  # it grows by the planner's decisions
         return measurement_plan(self.plan_name, 0 if seed is None else seed)
+
+    @property
+    def adaptive(self) -> bool:
+        """Whether the plan is the adaptive one."""
+        return self.plan_name == ADAPTIVE_PLAN
+
+    def adaptive_settings(self, seed: int) -> AdaptiveSettings:
+        """The adaptive plan's settings (``measure --budget-min/--target-dE00/--validation``) for ``seed``.
+
+        Raises
+        ------
+        InputError
+            For a budget or target that is not above 0, or fewer than 1 validation colour.
+        """
+        return AdaptiveSettings(seed=int(seed), budget_min=self.budget_min, target_dE00=self.target_dE00,
+                                validation=int(self.validation))
 
     def describe_instrument(self) -> str:
         """E.g. ``"simulated CS-2000 (channel-interaction 0.1)"`` or ``"CS-2000 on /dev/ttyACM0"``."""
@@ -219,6 +279,11 @@ class CalibrationSetup:
         if self.display == "value-shot":
             host, port = self.engine_address
             return f"Unreal project at value-shot:{host}:{port}"
+        if self.display == "webxr":
+            host, port = self.webxr_address
+            eye = "" if self.eye == "both" else f", {self.eye} eye"
+            where = f"webxr:{port}" if host == WEBXR_DEFAULT_ADDRESS[0] else f"webxr:{host}:{port}"
+            return f"headset browser at {where}{eye}"
         return DISPLAY_KINDS[self.display]
 
 
@@ -245,6 +310,53 @@ def plan_estimate(plan: MeasurementPlan, effects: dict | None = None) -> PlanEst
     """Patch count and modelled instrument time of ``plan`` (see :class:`PlanEstimate`)."""
     headset = SimulatedHeadset(effects or {})
     return PlanEstimate(len(plan), plan.counts(), modelled_plan_duration_s(plan, headset))
+
+
+@dataclass(frozen=True)
+class AdaptiveEstimate:
+    """What the adaptive plan is expected to take, before it starts (its patches are chosen as it goes).
+
+    Attributes
+    ----------
+    core : PlanEstimate
+        The core it starts from.
+    validation_s : float
+        Seconds of the validation colours and the last white (measured at the end; the budget
+        keeps them in reserve).
+    paper_s : float
+        Seconds the ``paper`` plan would take on the same display.
+    budget_s : float
+        The session's budget: ``budget_min``, else :data:`~workbench.measurement.adaptive.PAPER_SHARE`
+        of ``paper_s`` but never less than the core and the validation colours (as the planner
+        sets it, from the modelled times rather than the times it will measure).
+    budget_given : bool
+        Whether the budget is the user's.
+    """
+
+    core: PlanEstimate
+    validation_s: float
+    paper_s: float
+    budget_s: float
+    budget_given: bool
+
+
+def adaptive_estimate(setup: CalibrationSetup) -> AdaptiveEstimate:
+    """The adaptive plan's core, budget and validation time on the simulated headset of ``setup``'s effects."""
+    from workbench.measurement.adaptive import validation_patches
+
+    seed = 0 if setup.seed is None else setup.seed
+    settings = setup.adaptive_settings(seed)
+    headset = SimulatedHeadset(setup.effects or {})
+    core = setup.plan()
+    core_estimate = PlanEstimate(len(core), core.counts(), modelled_plan_duration_s(core, headset))
+    closing = MeasurementPlan("validation", (*validation_patches(seed, settings.validation),
+                                             *core.patches[:1]))  # the validation colours and a white
+    validation_s = modelled_plan_duration_s(closing, headset)
+    paper_s = modelled_plan_duration_s(measurement_plan("paper", seed), headset)
+    if settings.budget_min is not None:
+        return AdaptiveEstimate(core_estimate, validation_s, paper_s, 60.0 * settings.budget_min, True)
+    budget = max(PAPER_SHARE * paper_s, core_estimate.instrument_s + validation_s)
+    return AdaptiveEstimate(core_estimate, validation_s, paper_s, budget, False)
 
 
 def cs2000_ports() -> list:
@@ -290,7 +402,8 @@ def planned(setup: CalibrationSetup) -> tuple:
 
 
 @contextmanager
-def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
+def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None, *, webxr_server=None,
+             cancel=None):
     """Open the instrument and the patch display and yield the run (new, or resumed from the journal).
 
     Parameters
@@ -301,6 +414,18 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
         by the caller in the GUI thread (its ``show`` may be called from a worker).
     on_countdown : callable, optional
         ``on_countdown(remaining_s, total_s)`` while the instrument measures.
+    webxr_server : WebXRServer, optional
+        For ``setup.display == "webxr"``: the running server whose page shows
+        the patches (the window's, shared with the Scene page); without it a
+        server is started on ``setup.webxr_address`` for the run. Either way
+        this blocks until the headset's browser has the page in VR (up to
+        :data:`~workbench.vr.patch_display.DEFAULT_PAGE_TIMEOUT_S`).
+    cancel : threading.Event, optional
+        Set it to stop waiting for the headset's browser (the window's Cancel).
+
+    An ``adaptive`` plan's run gets its planner
+    (:class:`~workbench.measurement.adaptive.AdaptivePlanner`, from the
+    journal header's settings when resumed), as ``measure --plan adaptive`` does.
 
     Yields
     ------
@@ -331,6 +456,8 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
         simulation = None
         settings = ({"simulated": setup.simulated, "eye": eye, "sync": sync.text} if journal is None
                     else dict(journal.header.settings))
+        if journal is None and plan.name == ADAPTIVE_PLAN and setup.adaptive:
+            settings["adaptive"] = setup.adaptive_settings(plan.seed).to_json()
         if setup.simulated:
             if journal is None:
                 seed = setup.seed if setup.seed is not None else (plan.seed if plan.seed is not None
@@ -347,11 +474,13 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
                 clock_offset_s=0.0 if journal is None else journal.session_end_s(), plan=plan,
                 session_length_s=settings.get("session_length_s")))
             settings["session_length_s"] = simulation.headset.session_length_s
-        display = _open_display(stack, setup, simulation, window_display, eye)
+        display = _open_display(stack, setup, simulation, window_display, eye, webxr_server, cancel)
         port = simulation.server.port if simulation else (None if setup.instrument == "auto" else setup.instrument)
         meter = stack.enter_context(open_cs2000(port, timeout_s=_INSTRUMENT_TIMEOUT_S, no_flash_write="if-supported"))
         stack.enter_context(meter.synchronised(sync))  # SCMS for the run, put back after it
         options = {"on_countdown": on_countdown}
+        if settings.get("adaptive") is not None:
+            options["planner"] = AdaptivePlanner(AdaptiveSettings.from_json(settings["adaptive"]))
         if simulation:
             options["clock"] = lambda header, journal: simulation.clock
         if journal is None:
@@ -365,7 +494,8 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None):
         yield run
 
 
-def _open_display(stack: ExitStack, setup: CalibrationSetup, simulation, window_display, eye: str = "both"):
+def _open_display(stack: ExitStack, setup: CalibrationSetup, simulation, window_display, eye: str = "both",
+                  webxr_server=None, cancel=None):
     if setup.display == "simulated":
         return SimulatedPatchDisplay(simulation.headset)
     if setup.display == "window":
@@ -379,6 +509,8 @@ def _open_display(stack: ExitStack, setup: CalibrationSetup, simulation, window_
             elif setup.display == "value-shot":
                 shown = stack.enter_context(ValueShotPatchDisplay(*setup.engine_address, _DISPLAY_TIMEOUT_S,
                                                                   VALUE_SHOT_RESEND_S))
+            elif setup.display == "webxr":
+                shown = stack.enter_context(_webxr_display(setup, eye, webxr_server, cancel))
             else:
                 host, port = setup.tcp_address
                 shown = stack.enter_context(TcpPatchDisplay(host, port, _DISPLAY_TIMEOUT_S,
@@ -387,3 +519,15 @@ def _open_display(stack: ExitStack, setup: CalibrationSetup, simulation, window_
             raise WorkbenchError(str(error)) from None
     # A simulated session measures the simulated headset, so it must see the patches too.
     return MirroredPatchDisplay(shown, SimulatedPatchDisplay(simulation.headset)) if simulation else shown
+
+
+def _webxr_display(setup: CalibrationSetup, eye: str, server, cancel):
+    """The WebXR page of ``server`` (or of a server started for the run), once it is in VR."""
+    from workbench.vr.patch_display import DEFAULT_PAGE_TIMEOUT_S, WebXRPatchDisplay
+
+    options = dict(eye=eye, timeout_s=_DISPLAY_TIMEOUT_S, page_timeout_s=DEFAULT_PAGE_TIMEOUT_S, cancel=cancel,
+                   client="vr-workbench gui")
+    if server is None:
+        host, port = setup.webxr_address
+        return WebXRPatchDisplay.serve(port, host=host, announce=None, **options)
+    return WebXRPatchDisplay(server, **options)

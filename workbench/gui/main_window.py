@@ -5,6 +5,9 @@ It only arranges pages (:mod:`workbench.gui.pages`) around one
 File menu (Open accepts everything ``diagnose`` reads; recent files), the
 log dock, and a status bar naming the instrument and the patch display. Recent
 files and the window layout persist (:class:`~workbench.gui.settings.WindowSettings`).
+The window's one WebXR server (:class:`~workbench.gui.headset_browser.HeadsetBrowser`)
+is shared by the Calibrate page (patches in the headset's browser) and the
+Scene page (the lightbooth in it), and stops when the window closes.
 
 Pages another module provides are imported defensively: a page that cannot be
 imported shows why in its place, and the others work.
@@ -32,6 +35,7 @@ from PySide6.QtWidgets import (
 )
 
 from workbench.errors import WorkbenchError
+from workbench.gui.headset_browser import HeadsetBrowser
 from workbench.gui.log_dock import LogDock
 from workbench.gui.settings import WindowSettings
 from workbench.gui.workers import CallWorker, describe_error
@@ -121,6 +125,7 @@ class MainWindow(QMainWindow):
         self.pages: dict = {}
         self._pending: dict = {}
         self._loaders: list = []
+        self.headset_browser = HeadsetBrowser(self)
         self.stack = QStackedWidget()
         self.flow = QButtonGroup(self)
         flow_bar = QHBoxLayout()
@@ -170,6 +175,8 @@ class MainWindow(QMainWindow):
         self._build_menus()
 
         calibrate = self.pages["calibrate"]
+        if hasattr(calibrate, "use_headset_browser"):
+            calibrate.use_headset_browser(self.headset_browser)
         calibrate.session_loaded.connect(lambda: self.show_page("diagnose"))
         calibrate.form.changed.connect(self._update_status)
         calibrate.error.connect(self.statusBar().showMessage)
@@ -257,6 +264,8 @@ class MainWindow(QMainWindow):
         """Connect what a page asks of the others (pages built later are wired when built)."""
         if key == "diagnose" and hasattr(page, "follow_up_requested"):
             page.follow_up_requested.connect(self.measure_follow_up)
+        if hasattr(page, "use_headset_browser"):
+            page.use_headset_browser(self.headset_browser)
 
     def measure_follow_up(self, plan_path, out_dir) -> str:
         """Measure a follow-up plan on the Calibrate page (into ``out_dir``; a new session without one)."""
@@ -398,6 +407,7 @@ class MainWindow(QMainWindow):
             stop = getattr(page, "shutdown", None)
             if callable(stop):
                 stop()
+        self.headset_browser.shutdown()
         self.log_dock.detach()
 
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt's name

@@ -25,6 +25,7 @@ from PySide6.QtCore import QThread, Signal
 
 from workbench.errors import WorkbenchError
 from workbench.gui.calibration_setup import CalibrationSetup, open_run
+from workbench.measurement.adaptive import plan_state as adaptive_plan_state
 
 __all__ = ["CallWorker", "MeasurementWorker", "describe_error"]
 
@@ -71,39 +72,57 @@ class MeasurementWorker(QThread):
         ``RunFinished``), in order.
     countdown(float, float)
         Remaining and total seconds of the measurement in flight.
+    plan_state(object)
+        With a dynamic plan (the adaptive one): its
+        :class:`~workbench.measurement.adaptive.PlanState` once the run has
+        started and after each patch (the plan so far, the latest decision,
+        the predicted held-out ΔE00, the budget left).
     failed(str)
         The run could not start, or stopped (``RunAborted``); the message says
         what to do.
 
     :meth:`pause`, :meth:`resume` and :meth:`cancel` may be called at any
     time, also before the instrument is open (a cancel then takes effect as
-    soon as the run exists).
+    soon as the run exists; while the run waits for the headset's browser, a
+    cancel stops the wait).
     """
 
     event = Signal(object)
     countdown = Signal(float, float)
+    plan_state = Signal(object)
     failed = Signal(str)
 
-    def __init__(self, setup: CalibrationSetup, window_display=None, parent=None):
+    def __init__(self, setup: CalibrationSetup, window_display=None, parent=None, *, webxr_server=None):
         super().__init__(parent)
         self.setup = setup
         self._window_display = window_display
+        self._webxr_server = webxr_server
         self._lock = threading.Lock()
         self._run = None
         self._cancelled = False
+        self._cancel_wait = threading.Event()  # stops the wait for the headset's browser
         self._paused = False
+
+    @property
+    def cancelled(self) -> bool:
+        """Whether :meth:`cancel` was called."""
+        return self._cancelled
 
     def run(self) -> None:  # noqa: D401 - Qt's name
         try:
-            with open_run(self.setup, self._window_display, on_countdown=self.countdown.emit) as run:
+            with open_run(self.setup, self._window_display, on_countdown=self.countdown.emit,
+                          webxr_server=self._webxr_server, cancel=self._cancel_wait) as run:
                 with self._lock:
                     self._run = run
                     if self._paused:
                         run.pause()
                     if self._cancelled:
                         run.cancel()
+                dynamic = run.planner is not None
                 for event in run.events():
                     self.event.emit(event)
+                    if dynamic:  # after each event: a decision is taken between two patches
+                        self.plan_state.emit(adaptive_plan_state(run.journal_so_far()))
         except Exception as error:  # noqa: BLE001 - every error reaches the user
             _LOG.debug("measurement worker failed", exc_info=True)
             self.failed.emit(describe_error(error))
@@ -126,5 +145,6 @@ class MeasurementWorker(QThread):
     def cancel(self) -> None:
         with self._lock:
             self._cancelled = True
+            self._cancel_wait.set()
             if self._run is not None:
                 self._run.cancel()

@@ -10,6 +10,19 @@ the table of patches (failures with their reason; re-measure any of them).
 When a run finishes, the session is read and diagnosed off the GUI thread and
 put into the workspace, which fills the other pages.
 
+With the adaptive plan the page shows the plan growing as the planner decides
+(:class:`~workbench.measurement.adaptive.PlanState`, sent by the worker after
+each step): the patches planned so far and how many the planner chose, the
+latest decision's reason as the journal records it, the predicted held-out
+ΔE00 and the instrument time left in the budget; the table gets a row for each
+patch chosen, and at the end the held-out score on the validation colours with
+its 95 % confidence interval
+(:func:`~workbench.measurement.adaptive.held_out_summary`).
+
+With the headset's browser (WebXR) as the patch display, the run uses the
+window's WebXR server (:class:`~workbench.gui.headset_browser.HeadsetBrowser`,
+shared with the Scene page) and waits until the page is in VR; Cancel stops the wait.
+
 :meth:`CalibratePage.measure_follow_up` measures a follow-up plan (the Fit &
 diagnose page's "Measure the N patches that identify this") into the
 finished session's directory with the session's setup, as ``measure
@@ -38,12 +51,15 @@ from PySide6.QtWidgets import (
 from workbench.errors import WorkbenchError
 from workbench.gui.calibration_setup import SIMULATED, CalibrationSetup, planned
 from workbench.gui.diagnosis_views import XYZ_to_srgb8
+from workbench.gui.headset_browser import HeadsetBrowser
 from workbench.gui.measure_window import WorkerPatchDisplay
 from workbench.gui.widgets.calibration_form import CalibrationForm
+from workbench.gui.widgets.headset_panel import HeadsetPanel
 from workbench.gui.widgets.measurement_plots import MeasurementPlots
 from workbench.gui.widgets.patch_swatch import SplitSwatch
 from workbench.gui.widgets.patch_table import PatchTable
 from workbench.gui.workers import CallWorker, MeasurementWorker, describe_error
+from workbench.measurement.adaptive import held_out_summary
 from workbench.measurement.runner import (
     PatchMeasured,
     PatchStarted,
@@ -64,6 +80,10 @@ _FORM_WIDTH = 440
 
 _FORM_MIN_WIDTH = 300
 """Pixels: the least width of the setup form's column (the form fits it without scrolling sideways)."""
+
+
+def _escape(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
 class CalibratePage(QWidget):
@@ -93,8 +113,18 @@ class CalibratePage(QWidget):
         self._white_XYZ = None
         self._setup: CalibrationSetup | None = None
         self._active = False
+        self._core_size = 0
+        self._adaptive_run = False
+        self.plan_state = None
+        """The adaptive plan's latest :class:`~workbench.measurement.adaptive.PlanState` (None: not adaptive)."""
 
         self.form = CalibrationForm()
+        self.headset = HeadsetPanel(inline_qr=True, qr_px=110)
+        self.headset.setMaximumWidth(380)
+        self._own_headset = HeadsetBrowser(self)  # until the window gives its shared one
+        self.headset_browser = self._own_headset
+        self.headset.bind(self._own_headset)
+        self.form.bind_headset_browser(self._own_headset)
         # The form follows the column's width (it wraps and elides rather than widening): vertical
         # scrolling only, as on a 1366 × 768 screen.
         self.form_scroll = form_scroll = QScrollArea()
@@ -116,6 +146,10 @@ class CalibratePage(QWidget):
         self.progress = QProgressBar()
         self.progress.setFormat("%v of %m patches")
         self.eta_label = QLabel("")
+        self.plan_label = QLabel("")
+        self.plan_label.setWordWrap(True)
+        self.plan_label.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.plan_label.setVisible(False)
         self.message = QLabel("")
         self.message.setWordWrap(True)
         self.message.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
@@ -128,10 +162,12 @@ class CalibratePage(QWidget):
         status.addWidget(self.countdown_label)
         status.addWidget(self.progress)
         status.addWidget(self.eta_label)
+        status.addWidget(self.plan_label)
         status.addWidget(self.message)
         top = QHBoxLayout()
         top.addWidget(self.swatch, 1)
         top.addLayout(status, 1)
+        top.addWidget(self.headset, 1)  # the headset's browser: URL, QR code, page state
         right = QSplitter(Qt.Orientation.Vertical)
         top_widget = QWidget()
         top_widget.setLayout(top)
@@ -153,8 +189,25 @@ class CalibratePage(QWidget):
         self.cancel_button.clicked.connect(self.cancel)
         self.patches.remeasure.connect(self.remeasure)
         self.form.changed.connect(self._update_start_label)
+        self.form.display.currentIndexChanged.connect(self._show_headset_panel)
+        self._show_headset_panel()
         self._set_running(False)
         self._update_start_label()
+
+    def use_headset_browser(self, service: HeadsetBrowser) -> None:
+        """Show the patches in the headset's browser through ``service`` (the window's, shared)."""
+        if service is self.headset_browser:
+            return
+        self.headset_browser = service
+        self.headset.bind(service)
+        self.form.bind_headset_browser(service)
+        if self._own_headset is not None:
+            self._own_headset.shutdown()
+            self._own_headset = None
+
+    def _show_headset_panel(self) -> None:
+        """The headset's browser's URL, QR code and state show while it is the patch display."""
+        self.headset.setVisible(self.form.display.currentData() == "webxr")
 
     # -- controls -----------------------------------------------------------------------
     @property
@@ -185,6 +238,7 @@ class CalibratePage(QWidget):
         try:
             setup = setup or self.form.setup()
             plan, journal = planned(setup)
+            webxr_server = self._webxr_server(setup) if setup.display == "webxr" else None
             window_display = self._open_patch_window(setup) if setup.display == "window" else None
         except WorkbenchError as error:
             self._show_error(str(error))
@@ -198,9 +252,21 @@ class CalibratePage(QWidget):
             for record in journal.latest().values():
                 self._record_point(record)
         self.progress.setRange(0, len(plan))
-        self.worker = MeasurementWorker(setup, window_display, self)
+        adaptive = setup.adaptive if journal is None else "adaptive" in journal.header.settings
+        self._core_size = len(plan) - sum(len(d.get("patches", ())) for d in journal.decisions) \
+            if journal is not None else len(plan)
+        self._adaptive_run = bool(adaptive)
+        self.plan_state = None
+        self.plan_label.setVisible(adaptive)
+        self.plan_label.setText("adaptive plan: the core first, then the planner decides after each patch"
+                                if adaptive else "")
+        if webxr_server is not None:
+            self.patch_label.setText(f"waiting for the headset's browser: open {webxr_server.url} in it and "
+                                     "press Enter VR (Cancel stops waiting)")
+        self.worker = MeasurementWorker(setup, window_display, self, webxr_server=webxr_server)
         self.worker.event.connect(self._on_event)
         self.worker.countdown.connect(self._on_countdown)
+        self.worker.plan_state.connect(self._on_plan_state)
         self.worker.failed.connect(self._on_failed)
         self.worker.finished.connect(self._on_worker_finished)
         self.workspace.set_measurement(status="running", instrument=setup.describe_instrument(),
@@ -209,6 +275,15 @@ class CalibratePage(QWidget):
         self._active = True
         self._set_running(True)
         self.worker.start()
+
+    def _webxr_server(self, setup: CalibrationSetup):
+        """The running WebXR server at the setup's address (started if it is not)."""
+        service = self.headset_browser
+        server = service.server
+        if server is None or (server.host, server.port) != tuple(setup.webxr_address):
+            host, port = setup.webxr_address
+            server = service.start(host, port)
+        return server
 
     def _open_patch_window(self, setup: CalibrationSetup):
         from workbench.gui.patch_window import PatchWindow, QtPatchDisplay
@@ -295,6 +370,8 @@ class CalibratePage(QWidget):
             loader.wait()
         self.form.stop_workers()
         self._close_patch_window()
+        if self._own_headset is not None:
+            self._own_headset.shutdown()
 
     # -- events ---------------------------------------------------------------------------
     def _on_event(self, event) -> None:
@@ -313,6 +390,9 @@ class CalibratePage(QWidget):
             self._run_finished(event.summary)
 
     def _patch_started(self, event: PatchStarted) -> None:
+        if event.total != self.progress.maximum():  # a dynamic plan has grown
+            self.progress.setMaximum(event.total)
+        self.patches.add_patch(event.index, event.patch)
         rgb = event.patch.rgb
         self.patch_label.setText(f"<b>#{event.index}</b> {event.patch.kind} — DAC {rgb[0]}, {rgb[1]}, {rgb[2]}")
         self.countdown_label.setText("")
@@ -346,10 +426,38 @@ class CalibratePage(QWidget):
     def _show_eta(self, eta_s) -> None:
         self.eta_label.setText("" if eta_s is None else f"about {format_duration(eta_s)} left")
 
+    def _on_plan_state(self, state) -> None:
+        """Show the adaptive plan as it grows (a :class:`~workbench.measurement.adaptive.PlanState`)."""
+        chosen = state.planned - self._core_size
+        decisions = len(state.decisions)
+        parts = [f"<b>adaptive plan: {state.planned} patches so far</b> ({self._core_size} in the core, "
+                 f"{chosen} chosen by {decisions} decision{'s' if decisions != 1 else ''}; "
+                 f"{state.measured} measured)"]
+        if state.predicted_dE00 is not None:
+            parts.append(f"predicted held-out ΔE00 <b>{state.predicted_dE00:.3f}</b>")
+        if state.time_left_s is not None:
+            parts.append(f"budget left <b>{format_duration(state.time_left_s)}</b> of "
+                         f"{format_duration(state.budget_s)} (instrument time)")
+        text = "; ".join(parts)
+        if state.decisions:
+            last = state.decisions[-1]
+            text += f"<br>decision {last.get('number', decisions)}: {_escape(str(last.get('reason', '')))}"
+        if state.stopped:
+            text += "<br>the planner has stopped: measuring the validation colours"
+        self.plan_label.setVisible(True)
+        self.plan_label.setText(text)
+        self.plan_state = state
+
     def _on_countdown(self, remaining_s: float, total_s: float) -> None:
         self.countdown_label.setText(f"instrument: {remaining_s:.0f} s left of {total_s:.0f} s")
 
     def _on_failed(self, message: str) -> None:
+        if self.worker is not None and self.worker.cancelled and self.worker.setup.display == "webxr":
+            # cancelled while waiting for the headset's browser: nothing was measured
+            self.workspace.set_measurement(status="cancelled", message=message)
+            self.patch_label.setText("cancelled before the first patch (the headset's page was not in VR)")
+            _LOG.info("%s", message)
+            return
         self.workspace.set_measurement(status="aborted", message=message)
         self._show_error(message)
 
@@ -381,14 +489,22 @@ class CalibratePage(QWidget):
     def _load_session(self) -> None:
         """Read and diagnose the finished session off the GUI thread, then put it into the workspace."""
         out_dir = self._setup.out_dir
-        loader = CallWorker(lambda: load_path(out_dir), self)
+        adaptive = self._adaptive_run
+
+        def load():
+            return load_path(out_dir), (held_out_summary(out_dir) if adaptive else None)
+
+        loader = CallWorker(load, self)
         loader.done.connect(self._session_loaded)
         loader.failed.connect(lambda message: self._show_error(f"the session could not be diagnosed: {message}"))
         loader.finished.connect(lambda: self._loaders.remove(loader))
         self._loaders.append(loader)
         loader.start()
 
-    def _session_loaded(self, loaded) -> None:
+    def _session_loaded(self, result) -> None:
+        loaded, held_out = result
+        if held_out:
+            self.plan_label.setText(self.plan_label.text() + f"<br><b>{_escape(held_out)}</b>")
         try:
             self.workspace.apply(loaded)
         except Exception as error:  # noqa: BLE001 - a view failing must reach the user

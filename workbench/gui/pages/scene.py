@@ -7,6 +7,16 @@ switching the source or the profile computes the new images
 existing textures (:func:`workbench.scene.booth.relight_booth`). Anti-aliasing
 is off on purpose: on Mesa llvmpipe 8× MSAA costs 50–90 ms a frame, and the
 flat textured patches gain nothing from it.
+
+"Show in headset browser" serves the same lightbooth to a headset's browser
+(the WebXR page of :mod:`workbench.vr`, through the window's one server,
+:class:`~workbench.gui.headset_browser.HeadsetBrowser`, which the Calibrate
+page shares): it makes the runtime bundle of the current profile with the
+page's sources in a worker (a few seconds; a busy bar meanwhile), serves it,
+and shows the URL, a QR code and the page's state. The page's source is pushed
+to the headset as it changes, and a source switched in the headset is shown
+here; the headset's level (1 or 2, both shown here side by side) is named.
+The button again stops the server.
 """
 
 from __future__ import annotations
@@ -21,6 +31,8 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QHeaderView,
     QLabel,
+    QProgressBar,
+    QPushButton,
     QSizePolicy,
     QTableWidget,
     QTableWidgetItem,
@@ -29,6 +41,7 @@ from PySide6.QtWidgets import (
 )
 
 from workbench.errors import WorkbenchError
+from workbench.gui.widgets.headset_panel import HeadsetPanel
 from workbench.illuminants.user_library import resolve_illuminant
 from workbench.scene import LEVELS, level_images, patch_errors, scene_content
 
@@ -69,6 +82,9 @@ class ScenePage(QWidget):
         self._source_id = workspace.selected_sources[0]
         self._images: dict[int, object] = {}
         self._errors = None
+        self.headset_browser = None
+        self._bundler = None
+        self._bundle_profile = None
 
         self.source_box = QComboBox()
         self.source_box.setToolTip("The light source both views are lit by")
@@ -107,10 +123,28 @@ class ScenePage(QWidget):
         self.summary.setWordWrap(True)
         self.summary.setTextFormat(Qt.TextFormat.RichText)
 
+        self.headset_button = QPushButton("Show in headset browser")
+        self.headset_button.setCheckable(True)
+        self.headset_button.setToolTip("serve this lightbooth (the current profile, these sources) to a "
+                                       "headset's browser as a WebXR page; again: stop serving")
+        self.headset_button.setEnabled(False)  # until the window gives its server
+        self.headset_button.clicked.connect(self._toggle_headset)
+        self.headset_busy = QProgressBar()
+        self.headset_busy.setRange(0, 0)  # busy: write_bundle says nothing as it goes
+        self.headset_busy.setFormat("making the headset's bundle…")
+        self.headset_busy.setTextVisible(True)
+        self.headset_busy.setMaximumWidth(260)
+        self.headset_busy.setVisible(False)
+        self.headset = HeadsetPanel(inline_qr=False)
+        self.headset.setVisible(False)
         top = QHBoxLayout()
         top.addWidget(QLabel("Light source:"))
         top.addWidget(self.source_box)
         top.addWidget(self.caption, 1)
+        top.addWidget(self.headset_button)
+        headset_row = QHBoxLayout()
+        headset_row.addWidget(self.headset_busy)
+        headset_row.addWidget(self.headset, 1)
         bottom = QWidget()
         bottom_layout = QVBoxLayout(bottom)
         bottom_layout.setContentsMargins(0, 0, 0, 0)
@@ -126,6 +160,7 @@ class ScenePage(QWidget):
         self._bottom = bottom
         self._layout = layout = QVBoxLayout(self)
         layout.addLayout(top)
+        layout.addLayout(headset_row)
         layout.addWidget(self._placeholder, 1)  # the views take every pixel the table leaves
         layout.addWidget(bottom, 0)
 
@@ -135,7 +170,9 @@ class ScenePage(QWidget):
         self._unsubscribe = [
             workspace.subscribe("sources-changed", lambda ws: self._refill_sources()),
             workspace.subscribe("profile-changed", lambda ws: self._relight_if_built()),
+            workspace.subscribe("profile-changed", lambda ws: self._headset_note()),
         ]
+        self.source_changed.connect(self._push_scene)
 
     def _start_warm_up(self) -> None:
         if not getattr(self, "_shut", False) and not self._warmup.is_alive() and not self._handles:
@@ -266,6 +303,136 @@ class ScenePage(QWidget):
         painter.end()
         if not pixmap.save(str(path)):
             raise OSError(f"could not write {path}")
+
+    # -- the headset's browser --------------------------------------------------
+    def use_headset_browser(self, service) -> None:
+        """Serve the lightbooth through ``service`` (the window's :class:`~workbench.gui.headset_browser.HeadsetBrowser`)."""
+        if self.headset_browser is service:
+            return
+        self.headset_browser = service
+        self.headset.bind(service)
+        service.status_changed.connect(self._headset_status)
+        self.headset_button.setEnabled(True)
+        self._headset_status(service.status())
+
+    @property
+    def serving_scene(self) -> bool:
+        """Whether the headset's browser is served this lightbooth (a server with a bundle runs)."""
+        service = self.headset_browser
+        return service is not None and service.bundle_folder is not None
+
+    def show_in_headset(self) -> None:
+        """Make the bundle of the current profile and sources (in a worker), then serve it; the panel
+        shows the URL, the QR code and the page's state once it is served."""
+        service = self.headset_browser
+        if service is None or self._bundler is not None:
+            return
+        from workbench.gui.headset_browser import make_scene_bundle
+        from workbench.gui.workers import CallWorker
+
+        profile = self.workspace.profile
+        sources = list(self.workspace.selected_sources)
+        if self._source_id not in sources:
+            sources.append(self._source_id)
+        folder = service.scratch_folder() / "bundle"
+        self._bundle_profile = profile
+        self._bundler = CallWorker(lambda: make_scene_bundle(profile, sources, folder), self)
+        self._bundler.done.connect(self._bundle_made)
+        self._bundler.failed.connect(self._bundle_failed)
+        self._bundler.finished.connect(self._bundler_finished)
+        self.headset_busy.setVisible(True)
+        self.headset.setVisible(False)
+        self.headset_button.setEnabled(False)
+        self._bundler.start()
+
+    def _bundler_finished(self) -> None:
+        self._bundler = None
+        self.headset_busy.setVisible(False)
+        self.headset_button.setEnabled(self.headset_browser is not None)
+        self._headset_status(self.headset_browser.status() if self.headset_browser else None)
+
+    def _bundle_made(self, made) -> None:
+        service = self.headset_browser
+        from workbench.gui.calibration_setup import WEBXR_DEFAULT_ADDRESS
+
+        server = service.server
+        host, port = (server.host, server.port) if server is not None else WEBXR_DEFAULT_ADDRESS
+        restarted = server is not None
+        try:
+            service.start(host, port, bundle=made.folder)
+        except WorkbenchError as error:
+            self.headset.setVisible(True)
+            self.headset.show_problem(str(error))
+            return
+        if self._source_id in made.lights:
+            service.set_scene(self._source_id)
+        notes = []
+        if restarted:
+            notes.append("reload the page in the headset to load the lightbooth")
+        if made.left_out:
+            notes.append(f"{', '.join(made.left_out)} cannot go into a bundle (your own spectra)")
+        self._headset_note(notes)
+
+    def _bundle_failed(self, message: str) -> None:
+        self.headset.setVisible(True)
+        self.headset.show_problem(f"the headset's bundle could not be made: {message}")
+
+    def _toggle_headset(self) -> None:
+        service = self.headset_browser
+        if service is None:
+            return
+        if self.serving_scene:
+            if service.in_use:
+                self.headset.show_problem("a calibration is showing its patches on the page: cancel it first")
+                self.headset_button.setChecked(True)
+                return
+            service.stop()
+        else:
+            if service.in_use:
+                self.headset.setVisible(True)
+                self.headset.show_problem("a calibration is showing its patches on the page: the lightbooth "
+                                          "can be served when it has ended")
+                self.headset_button.setChecked(False)
+                return
+            self.show_in_headset()
+
+    def _headset_status(self, status) -> None:
+        """Follow the server: the button's state, and a source switched in the headset."""
+        serving = status is not None and self.serving_scene
+        self.headset_button.blockSignals(True)
+        self.headset_button.setChecked(serving or self._bundler is not None)
+        self.headset_button.blockSignals(False)
+        self.headset.setVisible(status is not None and self._bundler is None)
+        if not serving:
+            if status is not None:
+                self.headset.set_note("served for the calibration, without the lightbooth")
+            return
+        source, level = status.scene.get("source"), status.scene.get("level")
+        if source and source != self._source_id:  # switched in the headset
+            if self._handles:
+                self.select_source(source)
+            else:
+                self._source_id = source
+                self._refill_sources()
+                self._update_caption()
+        self._headset_note()
+
+    def _headset_note(self, extra=None) -> None:
+        if not self.serving_scene:
+            return
+        status = self.headset_browser.status()
+        scene = status.scene if status is not None else {}
+        notes = [f"the headset shows {scene.get('source')} at level {scene.get('level')}"]
+        if self._bundle_profile is not None and self._bundle_profile is not self.workspace.profile:
+            notes.append("the profile has changed since: press the button twice to serve the new one")
+        self._extra_notes = list(extra) if extra is not None else getattr(self, "_extra_notes", [])
+        self.headset.set_note("; ".join(notes + self._extra_notes))
+
+    def _push_scene(self, source_id: str) -> None:
+        service = self.headset_browser
+        if service is not None and self.serving_scene and not service.set_scene(source_id):
+            self._headset_note([f"{source_id} is not in the headset's bundle (press the button twice to "
+                                "make a new one)"])
 
     # -- internals ------------------------------------------------------------
     def _refill_sources(self) -> None:
@@ -405,6 +572,8 @@ class ScenePage(QWidget):
                 pass
         self._unsubscribe = []
         self._shut = True
+        if self._bundler is not None:
+            self._bundler.wait()
         if self._warmup.is_alive():
             self._warmup.join(timeout=60)
         if self.plotter is not None and not getattr(self.plotter, "_closed", True):

@@ -11,9 +11,17 @@ estimate wraps, and only the chosen patch display's settings show (the screen
 and "Identify screens" for a full-screen window, the address and "Test
 connection" for a VR application, the engine's address (and the settle time
 of the Unity convention) for the seed authors' Unity and Unreal projects, the
-eye for the displays that can show a patch to one eye); nothing needs
+address the headset's browser's page is served on (WebXR; the page shows its URL, QR code and
+connection state),
+the eye for the displays that can show a patch to one eye); nothing needs
 horizontal scrolling. The instrument's sync (none, internal at a frequency,
-external) sits next to the plan.
+external) sits next to the plan; the adaptive plan's budget, target and
+validation colours show when it is chosen.
+
+Choosing "headset browser (WebXR)" starts the window's WebXR server (shared
+with the Scene page, :class:`~workbench.gui.headset_browser.HeadsetBrowser`)
+at once, so that the URL and its QR code (on the page, beside the progress)
+are there to open in the headset before the calibration starts.
 """
 
 from __future__ import annotations
@@ -54,13 +62,17 @@ from workbench.gui.calibration_setup import (
     DISPLAY_KINDS,
     ENGINE_DEFAULT_ADDRESSES,
     PLAN_DESCRIPTIONS,
+    PLAN_NAMES,
     SIMULATED,
     SYNC_CHOICES,
+    WEBXR_DEFAULT_ADDRESS,
     CalibrationSetup,
+    adaptive_estimate,
     cs2000_ports,
     plan_estimate,
     check_tcp_display,
 )
+from workbench.measurement.adaptive import ADAPTIVE_PLAN, DEFAULT_VALIDATION, PAPER_SHARE, adaptive_core_plan
 from workbench.gui.screen_overlay import identify_screens
 from workbench.gui.workers import CallWorker
 from workbench.measurement.runner import format_duration
@@ -119,6 +131,8 @@ _DISPLAY_TIPS = {
                 "settle time (no acknowledgement, both eyes, full field only)",
     "value-shot": "the seed authors' Unreal convention: Value:r,g,b sent (again every second) until the engine "
                   "answers SHOT (both eyes, full field only)",
+    "webxr": "the workbench's WebXR page in the headset's own browser (Quest, Pico; Chrome or Edge with an "
+             "OpenXR runtime): open its URL or scan the QR code, press Enter VR; APL windows and one eye",
 }
 
 
@@ -138,6 +152,14 @@ def _field_with_button(field: QWidget, button: QPushButton, beside: QWidget | No
         row.addStretch(1)
     column.addLayout(row)
     return box
+
+
+def _slot() -> QWidget:
+    """An empty place in a row for a widget that moves between rows (the eye, with the chosen display)."""
+    slot = QWidget()
+    layout = QHBoxLayout(slot)
+    layout.setContentsMargins(0, 0, 0, 0)
+    return slot
 
 
 def _form(group: QGroupBox) -> QFormLayout:
@@ -231,7 +253,8 @@ class CalibrationForm(QWidget):
         self.test_tcp = QPushButton("Test connection")
         self.test_tcp.setToolTip("say hello to the VR application's patch server at this address")
         self.test_tcp.clicked.connect(self.test_connection)
-        self._tcp_row = _field_with_button(self.tcp, self.test_tcp, self.eye)
+        self._tcp_eye_slot = _slot()
+        self._tcp_row = _field_with_button(self.tcp, self.test_tcp, self._tcp_eye_slot)
         form.addRow("patch server", self._tcp_row)
         self.tcp_status = QLabel("")
         self.tcp_status.setWordWrap(True)
@@ -249,6 +272,20 @@ class CalibrationForm(QWidget):
         row.addWidget(self.engine, 1)
         row.addWidget(self.settle)
         form.addRow("engine", self._engine_row)
+        self.webxr_address = QLineEdit("{}:{}".format(*WEBXR_DEFAULT_ADDRESS))
+        self.webxr_address.setToolTip("where the page is served, HOST:PORT: 127.0.0.1 for a PC headset's browser "
+                                      "(or a Quest on USB with adb reverse); 0.0.0.0 for a standalone headset "
+                                      "on the network (the URL then has a token, and HTTPS)")
+        self.webxr_server_button = QPushButton("Start server")
+        self.webxr_server_button.setToolTip("serve the WebXR page (the Scene page shares the server)")
+        self.webxr_server_button.clicked.connect(self._toggle_webxr_server)
+        self._webxr_eye_slot = _slot()
+        self._webxr_row = _field_with_button(self.webxr_address, self.webxr_server_button, self._webxr_eye_slot)
+        form.addRow("serve page on", self._webxr_row)
+        self.webxr_status = QLabel("")
+        self.webxr_status.setWordWrap(True)
+        form.addRow("", self.webxr_status)
+        self._headset_service = None
         self._display_form = form
         self._engine_kind = "rgb-text"
         self.display.currentIndexChanged.connect(self._display_changed)
@@ -258,8 +295,11 @@ class CalibrationForm(QWidget):
         group = QGroupBox("Plan and output")
         form = _form(group)
         self.plan = ElidingComboBox()
-        for name, make_plan in MEASUREMENT_PLANS.items():
-            self.plan.addItem(f"{name} ({len(make_plan(0))} patches)", name)
+        for name in PLAN_NAMES:
+            if name == ADAPTIVE_PLAN:
+                self.plan.addItem(f"{name} (a core of {len(adaptive_core_plan(0))}, then grows)", name)
+            else:
+                self.plan.addItem(f"{name} ({len(MEASUREMENT_PLANS[name](0))} patches)", name)
             if name in PLAN_DESCRIPTIONS:
                 self.plan.setItemData(self.plan.count() - 1, PLAN_DESCRIPTIONS[name], Qt.ItemDataRole.ToolTipRole)
         self.plan.addItem("from a file…", "file")
@@ -293,13 +333,42 @@ class CalibrationForm(QWidget):
         self._plan_file_row.setLayout(row)
         row.setContentsMargins(0, 0, 0, 0)
         form.addRow("plan file", self._plan_file_row)
+        self.budget = QDoubleSpinBox(decimals=1, singleStep=1.0, suffix=" min budget")
+        self.budget.setRange(0.0, 600.0)
+        self.budget.setSpecialValueText("auto budget")
+        self.budget.setToolTip(f"instrument time the session may take (measure --budget-min); auto: "
+                               f"{PAPER_SHARE:.0%} of what the paper plan would take on this display, never "
+                               "less than the core and the validation colours")
+        self.target = QDoubleSpinBox(decimals=2, singleStep=0.05, prefix="stop at ΔE00 ")
+        self.target.setRange(0.0, 10.0)
+        self.target.setSpecialValueText("no target")
+        self.target.setToolTip("stop once the predicted held-out mean ΔE00 is at or below this "
+                               "(measure --target-dE00); no target: the budget and the floor of improvement "
+                               "per minute decide")
+        self.validation = QSpinBox(suffix=" validation")
+        self.validation.setRange(2, 200)
+        self.validation.setValue(DEFAULT_VALIDATION)
+        self.validation.setToolTip("seeded random colours measured at the end and never used to fit or to "
+                                   "choose: the honest score, with its 95 % confidence interval (measure "
+                                   "--validation)")
+        self._adaptive_row = QWidget()
+        row = QHBoxLayout(self._adaptive_row)
+        row.setContentsMargins(0, 0, 0, 0)
+        row.addWidget(self.budget, 1)
+        row.addWidget(self.target, 1)
+        form.addRow("adaptive", self._adaptive_row)
         self._plan_form = form
         self.plan.currentIndexChanged.connect(self._plan_changed)
         self.seed = QSpinBox()
         self.seed.setRange(0, 2**31 - 1)
         self.seed.setValue(secrets.randbelow(2**31))
         self.seed.setToolTip("seeds the validation colours (and the simulated instrument's noise)")
-        form.addRow("seed", self.seed)
+        seed_row = QWidget()
+        row = QHBoxLayout(seed_row)
+        row.setContentsMargins(0, 0, 0, 0)
+        row.addWidget(self.seed, 1)
+        row.addWidget(self.validation, 1)  # the adaptive plan's: shown with it (one row less than its own)
+        form.addRow("seed", seed_row)
         self.estimate = QLabel("")
         self.estimate.setWordWrap(True)
         self.estimate.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
@@ -316,7 +385,9 @@ class CalibrationForm(QWidget):
         for signal in (self.plan.currentIndexChanged, self.plan_file.textChanged, self.seed.valueChanged,
                        self.out_dir.textChanged, self.time_scale.valueChanged, self.instrument.currentIndexChanged,
                        self.display.currentIndexChanged, self.sync.currentIndexChanged, self.sync_hz.valueChanged,
-                       self.eye.currentIndexChanged, self.engine.textChanged, self.settle.valueChanged):
+                       self.eye.currentIndexChanged, self.engine.textChanged, self.settle.valueChanged,
+                       self.webxr_address.textChanged, self.budget.valueChanged, self.target.valueChanged,
+                       self.validation.valueChanged):
             signal.connect(self.changed)
         return group
 
@@ -362,12 +433,92 @@ class CalibrationForm(QWidget):
         self.engine.setEnabled(engine)
         self.settle.setVisible(kind == "rgb-text")
         self._display_form.setRowVisible(self._engine_row, engine)
-        self.eye.setEnabled(kind == "tcp")
+        webxr = kind == "webxr"
+        self._display_form.setRowVisible(self._webxr_row, webxr)
+        self._display_form.setRowVisible(self.webxr_status, webxr and bool(self.webxr_status.text()))
+        slot = self._webxr_eye_slot if webxr else self._tcp_eye_slot
+        if self.eye.parent() is not slot:
+            slot.layout().addWidget(self.eye)
+            self.eye.setVisible(True)  # reparenting hides a widget until the next event-loop turn
+        self.eye.setEnabled(kind in ("tcp", "webxr"))
         self._display_form.setRowVisible(self.tcp_status, kind == "tcp" and bool(self.tcp_status.text()))
+        if webxr and self._headset_service is not None and not self._headset_service.running:
+            self.start_webxr_server()
 
     def _plan_changed(self) -> None:
-        """The plan file's row shows only for a plan from a file (the form then fits 1366 × 768)."""
+        """The plan file's row shows only for a plan from a file, the adaptive plan's settings only for it
+        (the form then fits 1366 × 768)."""
         self._plan_form.setRowVisible(self._plan_file_row, self.plan.currentData() == "file")
+        adaptive = self.plan.currentData() == ADAPTIVE_PLAN
+        self._plan_form.setRowVisible(self._adaptive_row, adaptive)
+        self.validation.setVisible(adaptive)
+
+    # -- the headset's browser --------------------------------------------------------------
+    def bind_headset_browser(self, service) -> None:
+        """Show and drive ``service`` (the window's :class:`~workbench.gui.headset_browser.HeadsetBrowser`)."""
+        if self._headset_service is not None:
+            self._headset_service.status_changed.disconnect(self._webxr_server_changed)
+        self._headset_service = service
+        service.status_changed.connect(self._webxr_server_changed)
+        self._webxr_server_changed(service.status())
+        if self.display.currentData() == "webxr" and not service.running:
+            self.start_webxr_server()
+
+    @property
+    def headset_browser(self):
+        """The :class:`~workbench.gui.headset_browser.HeadsetBrowser` the form drives, or ``None``."""
+        return self._headset_service
+
+    def webxr_address_tuple(self) -> tuple:
+        """``(host, port)`` of the address field (port 0: a free one)."""
+        host, _, port = self.webxr_address.text().strip().rpartition(":")
+        if not host or not port.isdigit() or not 0 <= int(port) < 65536:
+            raise WorkbenchError(f"page address {self.webxr_address.text()!r} is not HOST:PORT "
+                                 "(e.g. 127.0.0.1:47900)")
+        return host.strip("[]"), int(port)
+
+    def start_webxr_server(self) -> bool:
+        """Serve the page on the address field's HOST:PORT; the panel says what went wrong, if anything."""
+        if self._headset_service is None:
+            return False
+        try:
+            host, port = self.webxr_address_tuple()
+            self._headset_service.start(host, port)
+        except WorkbenchError as error:
+            self._set_webxr_status(f"✗ {error}")
+            return False
+        return True
+
+    def _set_webxr_status(self, text: str) -> None:
+        self.webxr_status.setText(text)
+        self._display_changed()  # its row shows once it has something to say
+
+    def _toggle_webxr_server(self) -> None:
+        service = self._headset_service
+        if service is None:
+            return
+        if service.running:
+            if service.in_use:
+                self._set_webxr_status("✗ a calibration is showing its patches on the page: cancel it first")
+                return
+            service.stop()
+        else:
+            self.start_webxr_server()
+
+    def _webxr_server_changed(self, status) -> None:
+        running = status is not None
+        if running and self.webxr_status.text():
+            self._set_webxr_status("")
+        self.webxr_server_button.setText("Stop server" if running else "Start server")
+        self.webxr_address.setEnabled(not running)
+        if running:
+            server = self._headset_service.server
+            shown = f"{server.host}:{server.port}" if server is not None else None
+            if shown and self.webxr_address.text().strip() != shown:
+                self.webxr_address.blockSignals(True)
+                self.webxr_address.setText(shown)
+                self.webxr_address.blockSignals(False)
+                self.changed.emit()
 
     def _set_tcp_status(self, text: str) -> None:
         self.tcp_status.setText(text)
@@ -439,13 +590,17 @@ class CalibrationForm(QWidget):
             display=kind,
             screen=self.screen.currentData() if kind == "window" else None,
             tcp_address=self.tcp_address() if kind == "tcp" else None,
+            webxr_address=self.webxr_address_tuple() if kind == "webxr" else None,
             plan_name=self.plan.currentData(),
             plan_file=Path(self.plan_file.text()) if self.plan.currentData() == "file" else None,
             seed=self.seed.value(),
             engine_address=self.engine_address() if kind in ENGINE_DEFAULT_ADDRESSES else None,
             settle_s=self.settle.value(),
-            eye=self.eye.currentData() if kind == "tcp" else "both",
+            eye=self.eye.currentData() if kind in ("tcp", "webxr") else "both",
             sync=self.sync_text(),
+            budget_min=self.budget.value() or None,
+            target_dE00=self.target.value() or None,
+            validation=self.validation.value(),
         )
         fields.update(changes)
         return CalibrationSetup(**fields)
@@ -453,6 +608,10 @@ class CalibrationForm(QWidget):
     def _update_estimate(self) -> None:
         try:
             setup = self.setup()
+            if setup.adaptive:
+                self.estimate.setText(self._adaptive_estimate_text(setup))
+                return
+            self.estimate.setToolTip("")
             estimate = plan_estimate(setup.plan(), setup.effects)
         except WorkbenchError as error:
             self.estimate.setText(f"<span style='color:#b03a2e'>{error}</span>")
@@ -462,3 +621,24 @@ class CalibrationForm(QWidget):
         self.estimate.setText((f"{what[0].upper()}{what[1:]}: " if what else "") +
                               f"<b>{estimate.patches} patches</b> ({kinds}); instrument time about "
                               f"<b>{format_duration(estimate.instrument_s)}</b> (dark patches take longest)")
+
+    def _adaptive_estimate_text(self, setup: CalibrationSetup) -> str:
+        """Three lines at the narrowest column (the form then fits 1366 × 768); the tooltip says the rest."""
+        estimate = adaptive_estimate(setup)
+        core = format_duration(estimate.core.instrument_s)
+        target = f" or ΔE00 {setup.target_dE00:g}" if setup.target_dE00 else ""
+        budget = (f"your <b>{format_duration(estimate.budget_s)}</b> of instrument time{target}"
+                  if estimate.budget_given else
+                  f"about <b>{format_duration(estimate.budget_s)}</b> of instrument time{target} "
+                  f"({PAPER_SHARE * 100:.0f} % of paper's)")
+        self.estimate.setToolTip(
+            f"The adaptive plan measures a core of {estimate.core.patches} patches (about {core} on the simulated "
+            f"headset), then after each patch measures the one that lowers the predicted held-out ΔE00 most per "
+            f"second, until the budget ({format_duration(estimate.budget_s)}"
+            + ("" if estimate.budget_given else f": {PAPER_SHARE * 100:.0f} % of the paper plan's "
+               f"{format_duration(estimate.paper_s)}, never less than the core and the validation colours")
+            + ")" + (f", the target ΔE00 {setup.target_dE00:g}" if setup.target_dE00 else "")
+            + f" or the floor of improvement per minute; it ends with {setup.validation} validation colours and "
+            f"a white (about {format_duration(estimate.validation_s)}), kept in reserve in the budget.")
+        return (f"Core of <b>{estimate.core.patches} patches</b> ({core}), grows to {budget}, "
+                f"{setup.validation} validation colours included")

@@ -82,6 +82,17 @@ class PatchTable(QWidget):
                 self.set_record(record)
         self._update_failures()
 
+    def add_patch(self, index: int, patch) -> None:
+        """A row for a patch a dynamic plan (the adaptive one) has added, if it has none yet."""
+        if index < self.table.rowCount():
+            return
+        self.table.setRowCount(index + 1)
+        for column, text in enumerate((str(index), patch.kind, "{}, {}, {}".format(*patch.rgb), "pending", "", "")):
+            item = QTableWidgetItem(text)
+            if column == 0:
+                item.setData(Qt.ItemDataRole.UserRole, index)
+            self.table.setItem(index, column, item)
+
     def set_measuring(self, index: int) -> None:
         self._set(index, 3, "measuring…")
         self.table.scrollToItem(self.table.item(index, 0))
