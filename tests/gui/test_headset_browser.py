@@ -193,10 +193,10 @@ def test_cancel_while_waiting_for_the_headset_stops_the_wait_and_measures_nothin
     _configure_simulated(page, tmp_path / "run")
     qtbot.waitUntil(lambda: window.headset_browser.running, timeout=10_000)
     qtbot.mouseClick(page.start_button, Qt.MouseButton.LeftButton)
-    assert page.running and "waiting for the headset's browser" in page.patch_label.text()
-    assert window.headset_browser.server.url in page.patch_label.text()
+    assert page.running and "waiting for the headset's browser to enter VR" in page.patch_label.text()
     qtbot.waitUntil(lambda: window.headset_browser.in_use, timeout=10_000)  # the page is told a run waits
-    assert "showing a calibration's patches" in page.headset.state.text()
+    qtbot.waitUntil(lambda: page.headset.state.text() == "waiting for the headset's browser — a calibration "
+                    "is waiting for it", timeout=5000)
     started = time.monotonic()
     qtbot.mouseClick(page.cancel_button, Qt.MouseButton.LeftButton)
     qtbot.waitUntil(lambda: not page.running, timeout=10_000)
@@ -263,9 +263,12 @@ def test_show_in_headset_browser_serves_the_lightbooth_pushes_the_source_and_fol
     scene = window.page("scene")
     assert "served for the calibration, without the lightbooth" in scene.headset.state.text()
     assert not scene.headset_button.isChecked()
+    earlier = FakePage(service.server.url)  # a headset has the page open, without a lightbooth
+    qtbot.waitUntil(lambda: service.status().page.connected, timeout=5000)
     qtbot.mouseClick(scene.headset_button, Qt.MouseButton.LeftButton)
     assert scene.headset_busy.isVisibleTo(scene) and scene.headset_button.isChecked()
     qtbot.waitUntil(lambda: scene.serving_scene, timeout=RUN_TIMEOUT_MS)
+    earlier.close()  # the server restarted with the bundle: that page must be reloaded, and is told so
     server = service.server
     assert server.port == port and server.bundle is not None  # the same address, now with the bundle
     assert set(server.bundle.light_ids()) == set(window.workspace.selected_sources)

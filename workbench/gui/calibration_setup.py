@@ -406,6 +406,10 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None, *,
              cancel=None):
     """Open the instrument and the patch display and yield the run (new, or resumed from the journal).
 
+    An ``adaptive`` plan's run gets its planner
+    (:class:`~workbench.measurement.adaptive.AdaptivePlanner`, from the
+    journal header's settings when resumed), as ``measure --plan adaptive`` does.
+
     Parameters
     ----------
     setup : CalibrationSetup
@@ -422,10 +426,6 @@ def open_run(setup: CalibrationSetup, window_display=None, on_countdown=None, *,
         :data:`~workbench.vr.patch_display.DEFAULT_PAGE_TIMEOUT_S`).
     cancel : threading.Event, optional
         Set it to stop waiting for the headset's browser (the window's Cancel).
-
-    An ``adaptive`` plan's run gets its planner
-    (:class:`~workbench.measurement.adaptive.AdaptivePlanner`, from the
-    journal header's settings when resumed), as ``measure --plan adaptive`` does.
 
     Yields
     ------

@@ -121,8 +121,9 @@ class HeadsetBrowser(QObject):
         return status is not None and status.patches is not None
 
     # -- life -----------------------------------------------------------------------------------
-    def start(self, host: str, port: int, bundle=None):
-        """Serve the page on ``host:port`` (with ``bundle``'s lightbooth); return the server.
+    def start(self, host: str, port: int, bundle=None, source: str | None = None):
+        """Serve the page on ``host:port`` (with ``bundle``'s lightbooth, showing ``source`` first if it
+        holds it); return the server.
 
         A server already running there is kept (and restarted with ``bundle``
         when one is given and it serves another); one running elsewhere is
@@ -149,7 +150,10 @@ class HeadsetBrowser(QObject):
             if bundle is None:
                 bundle = self._bundle_folder
             self._close_server()
-        server = WebXRServer(host=host, port=port, bundle=bundle).start()
+        server = WebXRServer(host=host, port=port, bundle=bundle)
+        if source is not None and server.bundle is not None and source in server.bundle.light_ids():
+            server.set_scene(source)  # before the page can load the scene
+        server.start()
         self._server, self._bundle_folder = server, bundle
         server.add_listener(lambda status, server=server: self._from_server.emit(server, status))
         _LOG.info("headset browser: serving %s%s", server.url, f" with the bundle {bundle}" if bundle else "")

@@ -36,8 +36,9 @@ import logging
 from dataclasses import replace
 
 import numpy as np
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import QEventLoop, Qt, Signal
 from PySide6.QtWidgets import (
+    QApplication,
     QHBoxLayout,
     QLabel,
     QProgressBar,
@@ -120,7 +121,8 @@ class CalibratePage(QWidget):
 
         self.form = CalibrationForm()
         self.headset = HeadsetPanel(inline_qr=True, qr_px=110)
-        self.headset.setMaximumWidth(380)
+        self.headset.setMinimumWidth(300)  # the state's words beside the QR code, not a column of them
+        self.headset.setMaximumWidth(420)
         self._own_headset = HeadsetBrowser(self)  # until the window gives its shared one
         self.headset_browser = self._own_headset
         self.headset.bind(self._own_headset)
@@ -142,6 +144,7 @@ class CalibratePage(QWidget):
             buttons.addWidget(button)
         self.swatch = SplitSwatch()
         self.patch_label = QLabel("no patch yet")
+        self.patch_label.setWordWrap(True)  # a long line (a run's summary) wraps rather than widening the column
         self.countdown_label = QLabel("")
         self.progress = QProgressBar()
         self.progress.setFormat("%v of %m patches")
@@ -162,15 +165,18 @@ class CalibratePage(QWidget):
         status.addWidget(self.countdown_label)
         status.addWidget(self.progress)
         status.addWidget(self.eta_label)
-        status.addWidget(self.plan_label)
         status.addWidget(self.message)
         top = QHBoxLayout()
         top.addWidget(self.swatch, 1)
         top.addLayout(status, 1)
-        top.addWidget(self.headset, 1)  # the headset's browser: URL, QR code, page state
+        top.addWidget(self.headset, 0)  # the headset's browser: URL, QR code, page state
         right = QSplitter(Qt.Orientation.Vertical)
         top_widget = QWidget()
-        top_widget.setLayout(top)
+        column = QVBoxLayout(top_widget)
+        column.setContentsMargins(0, 0, 0, 0)
+        column.addLayout(top, 1)
+        column.addWidget(self.plan_label)  # the adaptive plan: under both, as wide as the page
+        self._right, self._top_widget, self._top_row = right, top_widget, top
         right.addWidget(top_widget)
         right.addWidget(self.plots)
         right.addWidget(self.patches)
@@ -252,6 +258,7 @@ class CalibratePage(QWidget):
             for record in journal.latest().values():
                 self._record_point(record)
         self.progress.setRange(0, len(plan))
+        self.progress.setValue(0 if journal is None else sum(1 for r in journal.latest().values() if r.ok))
         adaptive = setup.adaptive if journal is None else "adaptive" in journal.header.settings
         self._core_size = len(plan) - sum(len(d.get("patches", ())) for d in journal.decisions) \
             if journal is not None else len(plan)
@@ -260,9 +267,9 @@ class CalibratePage(QWidget):
         self.plan_label.setVisible(adaptive)
         self.plan_label.setText("adaptive plan: the core first, then the planner decides after each patch"
                                 if adaptive else "")
+        self._fit_top()
         if webxr_server is not None:
-            self.patch_label.setText(f"waiting for the headset's browser: open {webxr_server.url} in it and "
-                                     "press Enter VR (Cancel stops waiting)")
+            self.patch_label.setText("waiting for the headset's browser to enter VR (Cancel stops waiting)")
         self.worker = MeasurementWorker(setup, window_display, self, webxr_server=webxr_server)
         self.worker.event.connect(self._on_event)
         self.worker.countdown.connect(self._on_countdown)
@@ -392,6 +399,7 @@ class CalibratePage(QWidget):
     def _patch_started(self, event: PatchStarted) -> None:
         if event.total != self.progress.maximum():  # a dynamic plan has grown
             self.progress.setMaximum(event.total)
+            self.workspace.set_measurement(total=event.total)
         self.patches.add_patch(event.index, event.patch)
         rgb = event.patch.rgb
         self.patch_label.setText(f"<b>#{event.index}</b> {event.patch.kind} — DAC {rgb[0]}, {rgb[1]}, {rgb[2]}")
@@ -443,10 +451,29 @@ class CalibratePage(QWidget):
             last = state.decisions[-1]
             text += f"<br>decision {last.get('number', decisions)}: {_escape(str(last.get('reason', '')))}"
         if state.stopped:
-            text += "<br>the planner has stopped: measuring the validation colours"
+            text += ("<br>the planner has stopped: measuring the validation colours" if state.measured
+                     < state.planned else "<br>the planner stopped, and the validation colours are measured")
         self.plan_label.setVisible(True)
         self.plan_label.setText(text)
         self.plan_state = state
+        self._fit_top()
+
+    def _fit_top(self) -> None:
+        """Make the pane above the plots tall enough for the adaptive plan's lines (from the table's and
+        the plots' heights), so that none is cut off."""
+        if not self.plan_label.isVisible():
+            return
+        QApplication.processEvents(QEventLoop.ProcessEventsFlag.ExcludeUserInputEvents)  # the label's width
+        width = self.plan_label.width() or self._top_widget.width()
+        need = (self._top_row.minimumSize().height() + self.plan_label.heightForWidth(width)
+                + 2 * self._top_widget.layout().spacing() + 8)
+        sizes = self._right.sizes()
+        short = need - sizes[0]
+        if short <= 0 or len(sizes) < 3:
+            return
+        take_table = min(short, max(sizes[2] - 120, 0))
+        take_plots = min(short - take_table, max(sizes[1] - 200, 0))
+        self._right.setSizes([sizes[0] + take_table + take_plots, sizes[1] - take_plots, sizes[2] - take_table])
 
     def _on_countdown(self, remaining_s: float, total_s: float) -> None:
         self.countdown_label.setText(f"instrument: {remaining_s:.0f} s left of {total_s:.0f} s")
@@ -505,6 +532,7 @@ class CalibratePage(QWidget):
         loaded, held_out = result
         if held_out:
             self.plan_label.setText(self.plan_label.text() + f"<br><b>{_escape(held_out)}</b>")
+            self._fit_top()
         try:
             self.workspace.apply(loaded)
         except Exception as error:  # noqa: BLE001 - a view failing must reach the user

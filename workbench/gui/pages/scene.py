@@ -85,6 +85,7 @@ class ScenePage(QWidget):
         self.headset_browser = None
         self._bundler = None
         self._bundle_profile = None
+        self._headset_scene = None  # the scene of the server's last status (a change there is the headset's)
 
         self.source_box = QComboBox()
         self.source_box.setToolTip("The light source both views are lit by")
@@ -135,16 +136,22 @@ class ScenePage(QWidget):
         self.headset_busy.setTextVisible(True)
         self.headset_busy.setMaximumWidth(260)
         self.headset_busy.setVisible(False)
-        self.headset = HeadsetPanel(inline_qr=False)
-        self.headset.setVisible(False)
+        self.headset = HeadsetPanel(inline_qr=False, idle_text=(
+            "not served to a headset's browser: “Show in headset browser” serves this lightbooth as a WebXR page"))
         top = QHBoxLayout()
         top.addWidget(QLabel("Light source:"))
         top.addWidget(self.source_box)
         top.addWidget(self.caption, 1)
         top.addWidget(self.headset_button)
-        headset_row = QHBoxLayout()
+        # The row keeps its height whatever it shows: the 3D views are not resized under VTK's feet.
+        self._headset_row = QWidget()
+        headset_row = QHBoxLayout(self._headset_row)
+        headset_row.setContentsMargins(0, 0, 0, 0)
         headset_row.addWidget(self.headset_busy)
         headset_row.addWidget(self.headset, 1)
+        self._headset_row.setFixedHeight(max(self.headset_busy.sizeHint().height(),
+                                             self.headset.sizeHint().height(),
+                                             QPushButton("QR code").sizeHint().height()))
         bottom = QWidget()
         bottom_layout = QVBoxLayout(bottom)
         bottom_layout.setContentsMargins(0, 0, 0, 0)
@@ -160,7 +167,7 @@ class ScenePage(QWidget):
         self._bottom = bottom
         self._layout = layout = QVBoxLayout(self)
         layout.addLayout(top)
-        layout.addLayout(headset_row)
+        layout.addWidget(self._headset_row)
         layout.addWidget(self._placeholder, 1)  # the views take every pixel the table leaves
         layout.addWidget(bottom, 0)
 
@@ -348,6 +355,7 @@ class ScenePage(QWidget):
     def _bundler_finished(self) -> None:
         self._bundler = None
         self.headset_busy.setVisible(False)
+        self.headset.setVisible(True)
         self.headset_button.setEnabled(self.headset_browser is not None)
         self._headset_status(self.headset_browser.status() if self.headset_browser else None)
 
@@ -357,15 +365,13 @@ class ScenePage(QWidget):
 
         server = service.server
         host, port = (server.host, server.port) if server is not None else WEBXR_DEFAULT_ADDRESS
-        restarted = server is not None
+        restarted = server is not None and server.page.connected  # that page must reload for the lightbooth
         try:
-            service.start(host, port, bundle=made.folder)
+            service.start(host, port, bundle=made.folder, source=self._source_id)
         except WorkbenchError as error:
             self.headset.setVisible(True)
             self.headset.show_problem(str(error))
             return
-        if self._source_id in made.lights:
-            service.set_scene(self._source_id)
         notes = []
         if restarted:
             notes.append("reload the page in the headset to load the lightbooth")
@@ -399,16 +405,18 @@ class ScenePage(QWidget):
     def _headset_status(self, status) -> None:
         """Follow the server: the button's state, and a source switched in the headset."""
         serving = status is not None and self.serving_scene
+        previous, self._headset_scene = self._headset_scene, (dict(status.scene) if serving else None)
         self.headset_button.blockSignals(True)
         self.headset_button.setChecked(serving or self._bundler is not None)
         self.headset_button.blockSignals(False)
-        self.headset.setVisible(status is not None and self._bundler is None)
+        self.headset.setVisible(self._bundler is None)
         if not serving:
             if status is not None:
                 self.headset.set_note("served for the calibration, without the lightbooth")
             return
-        source, level = status.scene.get("source"), status.scene.get("level")
-        if source and source != self._source_id:  # switched in the headset
+        source = status.scene.get("source")
+        if source and source != self._source_id and previous is not None and status.scene != previous:
+            # switched in the headset (a scene the page has not pushed, e.g. a new server's first, is not)
             if self._handles:
                 self.select_source(source)
             else:

@@ -89,11 +89,15 @@ class HeadsetPanel(QWidget):
         shows it large (False: a page with little height to spare).
     qr_px : int
         The QR code's size, pixels.
+    idle_text : str
+        What it says while no server runs.
     """
 
-    def __init__(self, *, inline_qr: bool = True, qr_px: int = 100, parent=None):
+    def __init__(self, *, inline_qr: bool = True, qr_px: int = 100, idle_text: str = "the page is not served",
+                 parent=None):
         super().__init__(parent)
         self._service = None
+        self.idle_text = idle_text
         self.inline_qr = inline_qr
         self.qr = QrCode(qr_px if inline_qr else 240)
         self.url = QLabel("")
@@ -168,7 +172,7 @@ class HeadsetPanel(QWidget):
                 self.qr.setVisible(False)
             if self.qr_button is not None:
                 self.qr_button.setVisible(False)
-            self.state.setText("the page is not served")
+            self.state.setText(self.idle_text)
             self.state.setToolTip("")
             return
         self.url.setVisible(True)
@@ -183,7 +187,8 @@ class HeadsetPanel(QWidget):
             self.qr_button.setVisible(True)
         text = status.connection()
         if status.patches is not None:
-            text += " — showing a calibration's patches"
+            text += (" — showing a calibration's patches" if status.page.connected and status.page.immersive
+                     else " — a calibration is waiting for it")
         if self.note:
             text += f" — {self.note}"
         self.state.setText(text)
