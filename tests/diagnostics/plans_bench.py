@@ -459,6 +459,8 @@ def main(argv=None) -> int:
     parser.add_argument("--sessions", type=int, default=2)
     parser.add_argument("--scenarios", nargs="+", help=f"of {', '.join(scenarios())}")
     parser.add_argument("--first-seed", type=int, default=FIRST_SEED)
+    parser.add_argument("--plans", nargs="+", choices=PLANS, default=list(PLANS),
+                        help="measure only these plans (pool with --load for a table beside the others)")
     parser.add_argument("--json", metavar="FILE")
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--load", nargs="+", metavar="FILE",
@@ -467,14 +469,15 @@ def main(argv=None) -> int:
     if args.load:
         print(PlansBenchResult(outcomes_from_json(args.load), args.markdown).summary())
         return 0
-    outcomes = run_plans_bench(args.sessions, args.scenarios, first_seed=args.first_seed,
+    outcomes = run_plans_bench(args.sessions, args.scenarios, plans=tuple(args.plans),
+                               first_seed=args.first_seed,
                                progress=lambda d, t, o: print(f"\r{d}/{t} {o.scenario} {o.plan}".ljust(60),
                                                               end="", file=sys.stderr, flush=True))
     print(file=sys.stderr)
     result = PlansBenchResult(outcomes, args.markdown)
-    print(result.summary())
-    if args.json:
+    if args.json:  # first: a summary of one plan alone has no pairs to compare
         Path(args.json).write_text(json.dumps(result.to_json(), indent=1, default=str))
+    print(result.summary())
     return 0
 
 

@@ -86,6 +86,27 @@ scores) and on a clean display buys that with held-out accuracy. The authors' me
 needs only to predict better: it is the reference no exported profile may lose to."""
 
 
+WHITE_GROUP = 2
+"""The white references' group in the cross-validation's per-group mean
+(:func:`~workbench.diagnostics.cross_validation.cross_validated_errors`)."""
+
+
+def _without_whites(errors):
+    """Cross-validated (errors, groups) less the white references' rows (None stays None).
+
+    The grey-ramp candidates hold the white as the top level of their ramp, so a held-out white
+    is predicted from the other whites, where the other models predict it from the primaries;
+    with few rows (an adaptive plan's core) the whites' group weighs a third of the score, and a
+    grey-ramp model won the choice on the whites alone while it predicted the sweeps, the greys
+    and unseen colours worse. So a grey-ramp candidate must also predict the other rows no worse.
+    """
+    if errors is None:
+        return None
+    values, groups = errors
+    keep = groups != WHITE_GROUP
+    return (values[keep], groups[keep]) if keep.any() else errors
+
+
 def has_grey_ramp(context: DiagnosisContext) -> bool:
     """Whether the fit rows hold :data:`~workbench.diagnostics.authors.MIN_GREYS` grey levels."""
     rgb = context.raw.rgb
@@ -184,6 +205,12 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                         or (chosen in IDENTIFIED_CANDIDATES and name != chosen))
         needed = (CV_Z * standard_error if noise_tested else
                   -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES else 0.0)
+        if (gain > needed and np.isfinite(scores[name]) and name in GREY_RAMP_CANDIDATES
+                and paired_gain(_without_whites(chosen_errors), _without_whites(errors))[0] < 0):
+            notes.append(f"{name} does not beat the {chosen}: its gain ({gain:.3f}) is at the white "
+                         "references alone (a level of its own ramp) and it predicts the other "
+                         "rows worse")
+            continue
         if gain > needed and np.isfinite(scores[name]):
             notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
                          if gain > 0 else

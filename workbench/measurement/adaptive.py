@@ -125,13 +125,19 @@ _RAMP_KINDS = ("ramp-r", "ramp-g", "ramp-b")
 
 
 def adaptive_core_plan(seed: int) -> MeasurementPlan:
-    """The core the adaptive plan starts from (module doc); ``seed`` seeds its validation colours."""
+    """The core the adaptive plan starts from (module doc); ``seed`` seeds its validation colours.
+
+    A white after each channel's sweep: the core takes minutes (its black alone can take four)
+    and the planner's drift references by elapsed time start only after it, so without them a
+    session that stops soon after the core has its whites at the start, at the core's end and
+    after the validation colours, too few to see a warm-up."""
     patches = [Patch("white", _WHITE), Patch("black", _BLACK)]
     for c, kind in enumerate(_RAMP_KINDS):
         for level in (255, *CORE_LEVELS):
             rgb = [0, 0, 0]
             rgb[c] = level
             patches.append(Patch(kind, tuple(rgb)))
+        patches.append(Patch("white", _WHITE))  # a drift reference after each channel's sweep
     patches += [Patch("grey", (v, v, v)) for v in CORE_GREYS]
     patches.append(Patch("white", _WHITE))
     return MeasurementPlan(ADAPTIVE_PLAN, tuple(patches), int(seed))
