@@ -180,7 +180,10 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     held-out accuracy. Where ``channel-interaction`` was found the display is
     not additive, the correction answers it, and lowering the error is
     enough. A grey-ramp candidate replaces the model of an identified cause
-    (``power-limit``) only beyond noise.
+    (``power-limit``) only beyond noise. And a grey-ramp candidate must also
+    predict the rows other than the white references no worse than the model
+    it would replace (``_without_whites``: it predicts a held-out white
+    from the other whites, the top level of its ramp).
     """
     def score(errors):
         return float("inf") if errors is None else group_mean(*errors)
