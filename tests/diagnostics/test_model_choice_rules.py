@@ -1,0 +1,63 @@
+"""choose_model's rules on given cross-validated errors (the candidates' fits stubbed out).
+
+The cross-validation itself is tested elsewhere; here each candidate's per-row errors are
+given, so each rule is seen deciding: the sweep correction must predict the fit rows'
+mixtures no worse than the model it would replace, where there are enough of them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from workbench.diagnostics import model_choice
+
+
+def _errors(rng, sweeps, greys, whites, mixtures, counts=(30, 20, 4, 0)):
+    """Per-row errors around the given group means, with their groups 0..3."""
+    values, groups = [], []
+    for group, (mean, count) in enumerate(zip((sweeps, greys, whites, mixtures), counts)):
+        values.append(mean + 0.002 * rng.standard_normal(count))
+        groups.append(np.full(count, group))
+    return np.concatenate(values), np.concatenate(groups)
+
+
+@pytest.fixture
+def given_errors(monkeypatch):
+    """choose_model with each candidate's cross-validated errors taken from a dict."""
+    table = {}
+    monkeypatch.setattr(model_choice, "has_grey_ramp", lambda context: True)
+
+    def errors_of(context, fit, drift):
+        # the candidate's name is bound as the lambda's default argument
+        return table[fit.__defaults__[0]]
+
+    monkeypatch.setattr(model_choice, "cross_validated_errors_of", errors_of)
+    return table
+
+
+@pytest.mark.parametrize("mixtures", [0, 40])
+def test_the_sweep_correction_must_predict_the_mixtures_no_worse(given_errors, mixtures):
+    rng = np.random.default_rng(3)
+    counts = (30, 20, 4, mixtures)
+    extension = _errors(rng, 0.50, 0.50, 0.30, 0.50, counts)
+    given_errors["grey-ramp"] = _errors(rng, 0.36, 0.40, 0.24, 0.34, counts)
+    given_errors["grey-ramp+sweeps"] = _errors(rng, 0.10, 0.40, 0.24, 0.38, counts)
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
+                                       found=("channel-interaction",))
+    if mixtures:  # better on the sweeps it interpolates, worse on the mixtures: the grey ramp stays
+        assert choice.chosen == "grey-ramp"
+        assert f"predicts the {mixtures} mixtures worse" in choice.reason
+    else:  # no mixtures to tell: the sweeps decide, as before
+        assert choice.chosen == "grey-ramp+sweeps"
+
+
+def test_the_sweep_correction_that_also_predicts_the_mixtures_better_is_taken(given_errors):
+    rng = np.random.default_rng(4)
+    counts = (30, 20, 4, 40)
+    extension = _errors(rng, 0.50, 0.50, 0.30, 0.50, counts)
+    given_errors["grey-ramp"] = _errors(rng, 0.36, 0.40, 0.24, 0.34, counts)
+    given_errors["grey-ramp+sweeps"] = _errors(rng, 0.10, 0.40, 0.24, 0.30, counts)
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
+                                       found=("channel-interaction",))
+    assert choice.chosen == "grey-ramp+sweeps"
