@@ -149,3 +149,21 @@ def test_opening_a_display_on_a_page_that_never_enters_vr_says_what_is_missing(b
         with pytest.raises(PatchDisplayError, match="is connected but did not enter VR within 1.5 s"):
             opening.result(30)
         page.close()
+
+
+def test_a_click_on_the_booths_buttons_in_a_wide_window_switches_source_and_level(browser, vive_bundle):
+    """On a window wide enough, the booth is drawn beside the panel (not under it): a click is
+    picked in the canvas's own coordinates, so the buttons under the booth still answer."""
+    with WebXRServer(port=0, bundle=vive_bundle) as server:
+        page = PageDriver(browser, server.url, emulate=False, width=1100, height=620)
+        page.wait("vrWorkbench.state().connected && vrWorkbench.state().scene.source !== null")
+        box = page.page.evaluate("(() => { const r = document.getElementById('view')"
+                                 ".getBoundingClientRect(); return [r.left, r.width]; })()")
+        assert box[0] > 300  # beside the panel
+        before = page.state()["scene"]
+        page.page.mouse.click(615, 484)  # the source button, under the booth's left half
+        page.wait(f"vrWorkbench.state().scene.source !== {json.dumps(before['source'])}")
+        page.page.mouse.click(884, 484)  # the level button
+        page.wait(f"vrWorkbench.state().scene.level !== {before['level']}")
+        assert not page.errors
+        page.close()

@@ -301,8 +301,9 @@ function onWindowFrame() {
 canvas.addEventListener('click', (event) => {
   if (!booth || state.session) return;
   const { projection, view, eye } = windowView();
-  const x = (event.clientX / canvas.clientWidth) * 2 - 1;
-  const y = 1 - (event.clientY / canvas.clientHeight) * 2;
+  const box = canvas.getBoundingClientRect();  // the canvas sits beside the panel on wide windows
+  const x = ((event.clientX - box.left) / box.width) * 2 - 1;
+  const y = 1 - ((event.clientY - box.top) / box.height) * 2;
   const inverse = mat4.invert(mat4.multiply(projection, view));
   const far = mat4.transform(inverse, [x, y, 1]);
   const point = [far[0] / far[3], far[1] / far[3], far[2] / far[3]];
