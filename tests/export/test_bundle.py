@@ -172,6 +172,20 @@ def test_export_command_writes_a_bundle_from_cube_files(tmp_path, vive_profile, 
     assert json.loads((out / "bundle.json").read_text())["lights"] == ["cie-d65"]
 
 
+@pytest.mark.slow
+def test_export_lightbooth_adds_the_unity_sample_s_two_cubes(tmp_path, capsys):
+    from profiles import example_profile_path
+    from workbench.cli import main
+
+    out = tmp_path / "bundle"
+    assert main(["export", str(example_profile_path("htc-vive-paper")), "--bundle", str(out),
+                 "--lights", "cie-d65", "--lut-size", "9", "--lightbooth", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert [cube["name"] for cube in summary["cubes"]] == ["colorchecker", "ishihara"]
+    for name in ("colorchecker", "ishihara"):
+        assert (out / "level2" / name / "coefficients.bin").is_file()
+
+
 def test_export_refuses_a_folder_that_is_not_a_bundle(tmp_path, vive_profile):
     (tmp_path / "notes.txt").write_text("mine")
     with pytest.raises(InputError, match="holds files and is not a bundle"):

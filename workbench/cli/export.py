@@ -26,6 +26,9 @@ def register(subparsers) -> None:
                         help="source ids, comma-separated (default: the profile's lights)")
     parser.add_argument("--cube", action="append", default=[], metavar="CUBE",
                         help="hyperspectral cube for level 2 (.hdr, .npz, .h5, .mat); repeatable")
+    parser.add_argument("--lightbooth", action="store_true",
+                        help="add the Lightbooth sample's two level-2 cubes, 'colorchecker' and "
+                             "'ishihara' (the workbench's own booth surfaces, 101 bands)")
     parser.add_argument("--lut-size", type=int, default=33, metavar="N",
                         help="nodes per axis of display_inverse.cube (default 33)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -42,7 +45,12 @@ def _export(args) -> int:
         lights = [item.strip() for item in args.lights.split(",") if item.strip()]
         if not lights:
             raise InputError(f"--lights {args.lights!r}: give source ids separated by commas")
-    summary = write_bundle(profile, args.bundle, light_ids=lights, cubes=args.cube,
+    cubes = list(args.cube)
+    if args.lightbooth:
+        from workbench.export.bundle import lightbooth_cubes
+
+        cubes += lightbooth_cubes()
+    summary = write_bundle(profile, args.bundle, light_ids=lights, cubes=cubes,
                            lut_size=args.lut_size)
     if args.json:
         json.dump(summary.to_json(), sys.stdout, indent=1)
