@@ -4,7 +4,6 @@ and, during a real simulated run, the plan growing, the latest decision's reason
 
 from __future__ import annotations
 
-import gc
 import re
 
 import pytest
@@ -18,11 +17,8 @@ if _UNAVAILABLE is not None:
     pytest.skip(f"Qt cannot open a window here: {_UNAVAILABLE}", allow_module_level=True)
 
 from PySide6.QtCore import Qt  # noqa: E402
-from PySide6.QtWidgets import QApplication  # noqa: E402
 
 from workbench.gui.calibration_setup import adaptive_estimate  # noqa: E402
-from workbench.gui.main_window import MainWindow  # noqa: E402
-from workbench.gui.settings import WindowSettings  # noqa: E402
 from workbench.measurement.adaptive import (  # noqa: E402
     ADAPTIVE_PLAN,
     DEFAULT_VALIDATION,
@@ -32,24 +28,10 @@ from workbench.measurement.adaptive import (  # noqa: E402
 )
 from workbench.measurement.journal import read_journal  # noqa: E402
 from workbench.measurement.runner import JOURNAL_NAME, format_duration  # noqa: E402
-from workbench.workspace import Workspace  # noqa: E402
 
 pytestmark = pytest.mark.gui
 
 RUN_TIMEOUT_MS = 120_000
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    monkeypatch.setenv("VR_WORKBENCH_CONFIG_DIR", str(tmp_path / "config"))
-    window = MainWindow(Workspace(), WindowSettings(tmp_path / "config"))
-    window.show()
-    yield window
-    window.shutdown()
-    window.close()
-    window.deleteLater()
-    QApplication.processEvents()
-    gc.collect()
 
 
 def test_adaptive_is_in_the_plan_list_and_its_settings_show_with_it(window):

@@ -6,7 +6,6 @@ tone-curve card indented under the interaction's, tagged as its consequence, and
 than its column (a long evidence line or the follow-up button wraps instead of being clipped).
 """
 
-import gc
 
 import pytest
 
@@ -22,11 +21,8 @@ from PySide6.QtWidgets import QApplication, QLabel  # noqa: E402
 
 from tests.diagnostics.independent_generator import generate_session  # noqa: E402
 from tests.test_diagnostics import REAL, needs_real_data  # noqa: E402
-from workbench.gui.main_window import MainWindow  # noqa: E402
-from workbench.gui.settings import WindowSettings  # noqa: E402
 from workbench.gui.widgets.finding_cards import CONSEQUENCE_INDENT, ModelChoiceTable  # noqa: E402
 from workbench.session import write_session_csv  # noqa: E402
-from workbench.workspace import Workspace  # noqa: E402
 
 pytestmark = pytest.mark.gui
 
@@ -38,19 +34,6 @@ SIZES = ((1500, 950), (1366, 768))  # the window's default size, and a common la
 def knee_csv(tmp_path_factory):
     session = generate_session({"channel-interaction": "knee"}, seed=101, plan="paper").session
     return write_session_csv(session, tmp_path_factory.mktemp("knee") / "knee.csv")
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    monkeypatch.setenv("VR_WORKBENCH_CONFIG_DIR", str(tmp_path / "config"))
-    window = MainWindow(Workspace(), WindowSettings(tmp_path / "config"))
-    window.show()
-    yield window
-    window.shutdown()
-    window.close()
-    window.deleteLater()
-    QApplication.processEvents()
-    gc.collect()
 
 
 def _open(qtbot, window, path, size):

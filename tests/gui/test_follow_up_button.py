@@ -6,7 +6,6 @@ directory on the Calibrate page (same setup), and the new diagnosis reads the gr
 from a file outside a measurement directory gets the plan file put into the Calibrate form instead.
 """
 
-import gc
 import shutil
 
 import pytest
@@ -24,12 +23,9 @@ from PySide6.QtCore import Qt  # noqa: E402
 from workbench.cli import main  # noqa: E402
 from workbench.diagnostics.extension import interaction_shape  # noqa: E402
 from workbench.diagnostics.follow_up import propose_follow_up  # noqa: E402
-from workbench.gui.main_window import MainWindow  # noqa: E402
-from workbench.gui.settings import WindowSettings  # noqa: E402
 from workbench.measurement.journal import read_journal  # noqa: E402
 from workbench.measurement.plans import read_plan_file  # noqa: E402
 from workbench.measurement.runner import JOURNAL_NAME  # noqa: E402
-from workbench.workspace import Workspace  # noqa: E402
 
 pytestmark = pytest.mark.gui
 
@@ -40,20 +36,6 @@ QUICK = 28
 @pytest.fixture(autouse=True)
 def _config_in_tmp(tmp_path, monkeypatch):
     monkeypatch.setenv("VR_WORKBENCH_CONFIG_DIR", str(tmp_path / "config"))
-
-
-@pytest.fixture
-def window(qtbot, tmp_path):
-    from PySide6.QtWidgets import QApplication
-
-    window = MainWindow(Workspace(), WindowSettings(tmp_path / "config"))
-    window.show()
-    yield window
-    window.shutdown()
-    window.close()
-    window.deleteLater()
-    QApplication.processEvents()
-    gc.collect()
 
 
 @pytest.fixture

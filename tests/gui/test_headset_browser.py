@@ -11,7 +11,6 @@ switches, which need no rendering).
 from __future__ import annotations
 
 import asyncio
-import gc
 import json
 import shutil
 import socket
@@ -31,16 +30,12 @@ if _UNAVAILABLE is not None:
     pytest.skip(f"Qt cannot open a window here: {_UNAVAILABLE}", allow_module_level=True)
 
 from PySide6.QtCore import Qt  # noqa: E402
-from PySide6.QtWidgets import QApplication  # noqa: E402
 
 from workbench.gui.calibration_setup import open_run  # noqa: E402
-from workbench.gui.main_window import MainWindow  # noqa: E402
-from workbench.gui.settings import WindowSettings  # noqa: E402
 from workbench.measurement.journal import read_journal  # noqa: E402
 from workbench.measurement.runner import JOURNAL_NAME  # noqa: E402
 from workbench.vr.server import PAGE_PROTOCOL, PageState, ServerStatus  # noqa: E402
 from workbench.vr.terminal_qr import qr_matrix  # noqa: E402
-from workbench.workspace import Workspace  # noqa: E402
 
 pytestmark = pytest.mark.gui
 
@@ -51,19 +46,6 @@ def _free_port() -> int:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         return probe.getsockname()[1]
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    monkeypatch.setenv("VR_WORKBENCH_CONFIG_DIR", str(tmp_path / "config"))
-    window = MainWindow(Workspace(), WindowSettings(tmp_path / "config"))
-    window.show()
-    yield window
-    window.shutdown()
-    window.close()
-    window.deleteLater()
-    QApplication.processEvents()
-    gc.collect()
 
 
 def _choose_webxr(window, port: int, *, eye: str = "both"):
