@@ -201,6 +201,20 @@ def test_bench_plans_prints_its_table(capsys):
     assert "acceptance over 2 displays" in printed
 
 
+def test_bench_plans_measures_only_the_plans_named(capsys, monkeypatch):
+    from tests.diagnostics import plans_bench
+
+    asked = {}
+    monkeypatch.setattr(plans_bench, "run_plans_bench",
+                        lambda sessions, names, plans: asked.update(plans=plans) or [])
+    monkeypatch.setattr(plans_bench, "PlansBenchResult",
+                        lambda outcomes, markdown: SimpleNamespace(summary=lambda: "table"))
+    assert main(["bench", "plans", "--plans", "adaptive", "paper"]) == 0
+    assert asked["plans"] == ("adaptive", "paper")
+    assert main(["bench", "plans", "--plans", "adaptive", "fast"]) == 2
+    assert "--plans: unknown 'fast'; use some of paper, paper+greys, adaptive" in capsys.readouterr().err
+
+
 def test_no_fold_holds_every_white():
     """An adaptive session's few whites can all fall in one cross-validation fold; that fold's
     training set would have no white, and a candidate fitted to the white (the power limit) could

@@ -199,6 +199,8 @@ def _plans_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenarios", nargs="+", metavar="NAME",
                         help="only these scenarios (default: clean, every effect form, the pairs, "
                              "the simulated headset)")
+    parser.add_argument("--plans", nargs="+", metavar="PLAN",
+                        help="measure only these plans (default: paper, paper+greys, adaptive)")
     parser.add_argument("--markdown", action="store_true", help="print the docs' table")
 
 
@@ -215,7 +217,14 @@ def _plans_run(args: argparse.Namespace):
 
         raise InputError(f"--scenarios: unknown {', '.join(map(repr, unknown))}; use some of "
                          f"{', '.join(known)}")
-    outcomes = bench.run_plans_bench(args.sessions, args.scenarios)
+    unknown_plans = [name for name in args.plans or () if name not in bench.PLANS]
+    if unknown_plans:
+        from workbench.errors import InputError
+
+        raise InputError(f"--plans: unknown {', '.join(map(repr, unknown_plans))}; use some of "
+                         f"{', '.join(bench.PLANS)}")
+    outcomes = bench.run_plans_bench(args.sessions, args.scenarios,
+                                     plans=tuple(args.plans) if args.plans else bench.PLANS)
     return bench.PlansBenchResult(outcomes, args.markdown)
 
 
