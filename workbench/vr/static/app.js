@@ -198,10 +198,12 @@ async function enterVR() {
         new XRRigidTransform({ x: 0, y: 1.6, z: 0 }));
     }
     state.session = session;
+    document.body.classList.add('immersive');  // the mirror of both eyes takes the whole window
     state.refSpace = space;
     state.eyes = [];
     session.addEventListener('end', () => {
       state.session = null;
+      document.body.classList.remove('immersive');
       state.eyes = [];
       if (state.pending) { send({ ok: false, id: state.pending.id, error: 'the immersive session ended before the patch was shown' }); state.pending = null; }
       $('enter-vr').textContent = 'Enter VR';
