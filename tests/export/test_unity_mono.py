@@ -27,6 +27,7 @@ import pytest
 
 import workbench
 from tests.export.conftest import BUNDLE_LIGHTS
+from tests.export.test_conformance import consumer_module
 from tests.export.tools import need_tool
 from workbench.export import runtime_file
 from workbench.export.bundle import UNITY_PACKAGE, unity_package_files
@@ -73,16 +74,6 @@ def driver(engine) -> Path:
     exe = engine.parent / "LoaderDriver.exe"
     _mcs(f"-r:{engine}", f"-r:{runtime}", f"-out:{exe}", DRIVER)
     return exe
-
-
-def consumer_module(bundle: Path):
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("bundle_reference_consumer_mono",
-                                                  bundle / "runtime" / "reference_consumer.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def cube_points() -> np.ndarray:

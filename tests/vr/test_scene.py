@@ -4,7 +4,6 @@ computes it, the level-1 light colour as lights.json says, and the source / leve
 from __future__ import annotations
 
 import base64
-import importlib.util
 import json
 import time
 from pathlib import Path
@@ -12,18 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.export.test_conformance import consumer_module
 from tests.vr.conftest import InThread, PageDriver
 from workbench.vr.scene_cubes import SCENE_CUBE
 from workbench.vr.server import WebXRServer
-
-
-def reference_consumer(bundle: Path):
-    """The bundle's own runtime/reference_consumer.py (numpy only), as a module."""
-    spec = importlib.util.spec_from_file_location("vr_test_reference_consumer",
-                                                  bundle / "runtime" / "reference_consumer.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def page_texels(page: PageDriver, light: str) -> np.ndarray:
@@ -35,7 +26,7 @@ def page_texels(page: PageDriver, light: str) -> np.ndarray:
 def test_level2_texels_from_the_gpu_equal_the_reference_consumers_for_every_light(browser, request,
                                                                                   bundle_fixture):
     bundle = request.getfixturevalue(bundle_fixture)
-    consumer = reference_consumer(bundle)
+    consumer = consumer_module(bundle)
     reader = consumer.Bundle(bundle)
     with WebXRServer(port=0, bundle=bundle) as server:
         page = PageDriver(browser, server.url, emulate=False)

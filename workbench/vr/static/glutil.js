@@ -1,5 +1,13 @@
 // Small WebGL 2 and 4x4 matrix helpers (column-major, as WebGL and WebXR use).
 
+// A full-screen triangle from gl_VertexID alone (draw 3 vertices, no buffers): the vertex
+// shader of every pass that fills its viewport (the level-2 texels, the centring target).
+export const FULLSCREEN_VERTEX = `#version 300 es
+void main() {
+  vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
+}`;
+
 export function program(gl, vertexSource, fragmentSource) {
   const compile = (type, source) => {
     const shader = gl.createShader(type);

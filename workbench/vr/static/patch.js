@@ -5,13 +5,7 @@
 // tone mapping, no colour conversion). Each view's viewport is one eye's field; the patch fills
 // it (window 1) or a centred rectangle of its aspect ratio, sides sqrt(window) of the field's,
 // on the surround; the other eye is black when `eye` names one.
-import { program } from './glutil.js';
-
-const TARGET_VERTEX = `#version 300 es
-void main() {
-  vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-  gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
-}`;
+import { FULLSCREEN_VERTEX, program } from './glutil.js';
 
 // Black field; white rings at 10, 20, 30 and 40 % of the field's smaller side in radius, 2-pixel
 // lines, and a cross through the centre.
@@ -78,7 +72,7 @@ export function windowRect(viewport, window) {
 export class PatchPainter {
   constructor(gl) {
     this.gl = gl;
-    this.target = program(gl, TARGET_VERTEX, TARGET_FRAGMENT);
+    this.target = program(gl, FULLSCREEN_VERTEX, TARGET_FRAGMENT);
     this.vao = gl.createVertexArray();
   }
 

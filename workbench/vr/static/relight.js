@@ -4,13 +4,7 @@
 // u = sqrt(clamp(drive, 0, 1)); DAC = number of the channel's 255 thresholds <= u (from a per-cell
 // lower bound); texel = texel_table[channel][DAC]; alpha 0 where the light cannot carry the texel.
 // Rendered into an RGBA8 (UNORM) texture of the cube's size: the texels the engine uploads.
-import { program, nearest } from './glutil.js';
-
-const VERTEX = `#version 300 es
-void main() {
-  vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-  gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
-}`;
+import { FULLSCREEN_VERTEX, program, nearest } from './glutil.js';
 
 const FRAGMENT = `#version 300 es
 precision highp float;
@@ -143,7 +137,7 @@ export class Level2Relight {
     } else {
       gl.texImage3D(gl.TEXTURE_3D, 0, gl.RGB32F, 1, 1, 1, 0, gl.RGB, gl.FLOAT, new Float32Array(3));
     }
-    this.pass = program(gl, VERTEX, FRAGMENT);
+    this.pass = program(gl, FULLSCREEN_VERTEX, FRAGMENT);
     this.vao = gl.createVertexArray();
     this.framebuffer = gl.createFramebuffer();
   }
