@@ -22,8 +22,10 @@
   light is scaled by ``s_c = 1 + (r_c(L_c) − 1)(1 − w_c)``, ``r_c`` the ratio of
   the channel's own sweep to its grey-ramp curve at the same output (measured
   at the sweep levels, interpolated linearly), ``w_c = clip(mean_{o≠c} L_o / L_c,
-  0, 1)`` how grey the colour is from channel ``c``'s side: 1 on the greys
-  (the grey ramp exactly), 0 on the channel's own axis (its sweep exactly).
+  0, 1)^q`` how grey the colour is from channel ``c``'s side: 1 on the greys
+  (the grey ramp exactly), 0 on the channel's own axis (its sweep exactly);
+  ``q`` (``greyness_exponent``) how fast the grey ramp takes over as the other
+  channels come up (1: linearly, the form before it was a parameter).
   *Power limit* (``load_weights`` set): one gain for every channel,
   ``s = 1 − a · clip((load − knee)/(1 − knee), 0, 1)^p`` of the
   luminance-weighted load ``Σ w_c L_c`` (a single channel loads the panel by
@@ -91,6 +93,8 @@ class ChannelInteraction:
     exponent: float = 2.0
     axis_ratio: tuple | None = None
     """Per channel (outputs, ratios): the sweep-to-grey-ramp ratio ``r_c`` at grey-ramp outputs."""
+    greyness_exponent: float = 1.0
+    """Sweeps-against-the-grey-ramp form: ``q`` in ``w_c = clip(mean_{o≠c} L_o / L_c, 0, 1)^q``."""
     load_weights: tuple | None = None
     """Power-limit form: each channel's share of the load (its share of the white's luminance)."""
 
@@ -111,7 +115,8 @@ class ChannelInteraction:
             for c, (levels, ratios) in enumerate(self.axis_ratio):
                 own = output[..., c]
                 others = (output.sum(axis=-1) - own) / 2.0
-                greyness = np.clip(others / np.maximum(own, 1e-12), 0.0, 1.0)
+                greyness = np.clip(others / np.maximum(own, 1e-12), 0.0, 1.0) ** \
+                    self.greyness_exponent
                 ratio = np.interp(own, levels, ratios)
                 gains[..., c] = 1.0 + (ratio - 1.0) * (1.0 - greyness)
             return gains
@@ -125,7 +130,7 @@ class ChannelInteraction:
             return {"amount": self.amount, "knee": self.knee, "exponent": self.exponent,
                     "load_weights": [float(w) for w in self.load_weights]}
         if self.axis_ratio is not None:
-            return {"amount": self.amount,
+            return {"amount": self.amount, "greyness_exponent": float(self.greyness_exponent),
                     "axis_ratio": [{"output": [float(v) for v in levels],
                                     "ratio": [float(v) for v in ratios]}
                                    for levels, ratios in self.axis_ratio]}
@@ -218,7 +223,54 @@ class ExtendedDisplay(DisplayModel):
             last_change = change
             output = output + step * (new - output)
             drive = self._tone_inverse(np.clip(output, 0.0, 1.0))
-        return output
+        return output if simple else self._polish(target, output)
+
+    NEWTON_STEPS = 12
+    """Newton steps at most on colours the fixed point left short of their target."""
+
+    def _reproduced(self, output: np.ndarray) -> np.ndarray:
+        """XYZ less black of unclipped outputs ``output``, as :meth:`linear_drive` solves for."""
+        inside = np.clip(output, 0.0, 1.0)
+        vectors = self._luminance_vectors(self._tone_inverse(inside))
+        return np.einsum("...ij,...j->...i", vectors, output * self._gain(inside))
+
+    def _polish(self, target: np.ndarray, output: np.ndarray) -> np.ndarray:
+        """Newton steps (finite-difference Jacobian, halved until the residual falls) on the
+        colours whose residual the fixed point left above 1e-9 of their luminance.
+
+        A gain that changes steeply with the other channels' outputs (the grey ramp's fade near a
+        channel's axis) makes the fixed point oscillate; its halved steps then stall short of
+        the target. Colours it solved are returned unchanged.
+        """
+        flat_target = target.reshape(-1, 3)
+        flat = output.reshape(-1, 3).copy()
+        scale = np.maximum(np.abs(flat_target).max(axis=-1), 1e-12)
+        residual = self._reproduced(flat) - flat_target
+        for _ in range(self.NEWTON_STEPS):
+            norm = np.abs(residual).max(axis=-1)
+            open_ = norm > 1e-9 * scale
+            if not open_.any():
+                break
+            here, error = flat[open_], residual[open_]
+            step = 1e-7
+            jacobian = np.stack([(self._reproduced(here + step * np.eye(3)[k]) - error
+                                  - flat_target[open_]) / step for k in range(3)], axis=-1)
+            try:
+                delta = np.linalg.solve(jacobian, -error[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                break
+            best, best_error = here, error
+            best_norm = norm[open_]
+            for fraction in (1.0, 0.5, 0.25, 0.125):
+                trial = here + fraction * delta
+                trial_error = self._reproduced(trial) - flat_target[open_]
+                trial_norm = np.abs(trial_error).max(axis=-1)
+                better = trial_norm < best_norm
+                best = np.where(better[:, None], trial, best)
+                best_error = np.where(better[:, None], trial_error, best_error)
+                best_norm = np.where(better, trial_norm, best_norm)
+            flat[open_], residual[open_] = best, best_error
+        return flat.reshape(output.shape)
 
     def dac_from_drive(self, drive) -> np.ndarray:
         return 255.0 * self._tone_inverse(np.asarray(drive, dtype=float))
