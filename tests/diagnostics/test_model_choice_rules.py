@@ -61,3 +61,22 @@ def test_the_sweep_correction_that_also_predicts_the_mixtures_better_is_taken(gi
     choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
                                        found=("channel-interaction",))
     assert choice.chosen == "grey-ramp+sweeps"
+
+
+@pytest.mark.parametrize("others_worse_by, taken", [(0.05, False), (0.0, True)])
+def test_a_grey_ramp_gain_at_the_whites_alone_needs_the_other_rows_within_noise(
+        given_errors, others_worse_by, taken):
+    """The grey ramp predicts a held-out white from the other whites (its ramp's top): a gain
+    there with the sweeps and greys predicted worse beyond noise is refused; within noise (the
+    fit rows cannot tell the two apart), the authors' method is taken."""
+    rng = np.random.default_rng(5)
+    extension = _errors(rng, 0.30, 0.30, 0.60, 0.0)
+    given_errors["grey-ramp"] = _errors(rng, 0.30 + others_worse_by, 0.30 + others_worse_by,
+                                        0.05, 0.0)
+    given_errors["grey-ramp+sweeps"] = _errors(rng, 0.30 + others_worse_by,
+                                               0.30 + others_worse_by, 0.05, 0.0)
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False)
+    assert (choice.chosen == "grey-ramp") is taken, choice.reason
+    if not taken:
+        assert choice.chosen == "extension"
+        assert "predicts the other rows worse beyond noise" in choice.reason
