@@ -450,7 +450,8 @@ def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_
                       if extension_used else baseline_errors)
     return choose_model(context, "extension" if extension_used else "baseline", current_errors,
                         baseline_errors, drift="temporal-drift" in terms and extension_used,
-                        power_limit=power_limit, found=found)
+                        power_limit=power_limit, found=found,
+                        extension_terms=tuple(terms) if extension_used else ())
 
 
 def _answered_by(candidate: str) -> set:
