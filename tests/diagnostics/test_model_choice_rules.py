@@ -99,3 +99,22 @@ def test_the_sweep_correction_must_beat_noise_against_the_interactions_own_term(
     choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
                                        found=("channel-interaction",), extension_terms=terms)
     assert (choice.chosen == "grey-ramp+sweeps") is taken, choice.reason
+
+
+@pytest.mark.parametrize("power_limit_error, taken", [(0.30, True), (0.52, False)])
+def test_an_offered_power_limit_must_lower_the_error(given_errors, power_limit_error, taken):
+    """Offered (one load gain explains the sweeps and the white, but their bend was not a
+    finding), the power limit is taken where it predicts the fit rows better, and not where it
+    predicts them worse."""
+    rng = np.random.default_rng(7)
+    counts = (30, 20, 4, 0)
+    extension = _errors(rng, 0.50, 0.50, 0.50, 0.0, counts)
+    given_errors["power-limit"] = _errors(rng, power_limit_error, power_limit_error,
+                                          power_limit_error, 0.0, counts)
+    given_errors["grey-ramp"] = _errors(rng, 0.90, 0.90, 0.90, 0.0, counts)
+    given_errors["grey-ramp+sweeps"] = _errors(rng, 0.90, 0.90, 0.90, 0.0, counts)
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
+                                       found=("channel-interaction",),
+                                       extension_terms=("channel-interaction",),
+                                       power_limit_offered=True)
+    assert (choice.chosen == "power-limit") is taken, choice.reason

@@ -17,7 +17,8 @@ builds the whole model from it. So the exported model is chosen among
                        leaves the grey axis (it reproduces greys and sweeps both);
 ``power-limit``        where the diagnosis found the sweeps' bend to be a power limit's
                        (:mod:`workbench.diagnostics.power_limit`): power laws of the undimmed
-                       outputs and one load gain.
+                       outputs and one load gain; offered too where one load gain explains
+                       the sweeps and the white though their bend was no finding.
 =====================  ========================================
 
 The grey-ramp candidates exist where the fit rows hold at least
@@ -174,7 +175,7 @@ class ModelChoice:
 
 def choose_model(context: DiagnosisContext, current: str, current_errors, baseline_errors,
                  drift: bool, power_limit: bool = False, found=(),
-                 extension_terms=()) -> ModelChoice:
+                 extension_terms=(), power_limit_offered: bool = False) -> ModelChoice:
     """The exported model: term selection's, or an alternative that replaces it (Notes).
 
     Parameters
@@ -198,6 +199,10 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         ``black-offset`` is among them).
     extension_terms : sequence of str
         The terms of ``current`` where it is the extension.
+    power_limit_offered : bool
+        One load gain explains the sweeps and the white, but their bend was not
+        a finding: ``power-limit`` is tried first and taken where it lowers the
+        cross-validated error (as the grey-ramp candidates are).
 
     Notes
     -----
@@ -232,7 +237,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         scores["extension"] = score(current_errors)
     chosen, chosen_errors = current, current_errors
     notes = []
-    names = (("power-limit",) if power_limit else ()) + (
+    names = (("power-limit",) if power_limit or power_limit_offered else ()) + (
         GREY_RAMP_CANDIDATES if has_grey_ramp(context) else ())
     for name in names:
         errors = cross_validated_errors_of(
@@ -250,7 +255,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                                   and "channel-interaction" in extension_terms)))
                         or (chosen in IDENTIFIED_CANDIDATES and name != chosen))
         needed = (CV_Z * standard_error if noise_tested else
-                  -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES else 0.0)
+                  -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES and power_limit else 0.0)
         others = paired_gain(_without_whites(chosen_errors), _without_whites(errors))
         if (gain > needed and np.isfinite(scores[name]) and name in GREY_RAMP_CANDIDATES
                 and others[0] < -CV_Z * others[1]):

@@ -403,7 +403,9 @@ def diagnose(session: Session) -> Diagnosis:
     extended = (fit_extended(context, terms, baseline, tone_forms)
                 if cross_validation.get("use_extension") else baseline)
     choice = _choose_model(context, extended is not baseline, terms, cross_validation, baseline,
-                           cross_validation.get("tone_forms") or tone_forms, power_limit, found)
+                           cross_validation.get("tone_forms") or tone_forms,
+                           power_limit == "identified", found,
+                           power_limit_offered=power_limit == "offered")
     by_effect = dict(cross_validation["by_effect"])
     if choice.chosen in ALTERNATIVE_CANDIDATES:
         drift_in = "temporal-drift" in terms and extended is not baseline
@@ -443,7 +445,8 @@ def diagnose(session: Session) -> Diagnosis:
 
 
 def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation,
-                  baseline, tone_forms, power_limit: bool = False, found=()) -> ModelChoice:
+                  baseline, tone_forms, power_limit: bool = False, found=(),
+                  power_limit_offered: bool = False) -> ModelChoice:
     """:func:`~workbench.diagnostics.model_choice.choose_model` on term selection's result."""
     baseline_errors = cross_validated_errors(context, None)
     current_errors = (cross_validated_errors(context, terms, baseline, tone_forms)
@@ -451,6 +454,7 @@ def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_
     return choose_model(context, "extension" if extension_used else "baseline", current_errors,
                         baseline_errors, drift="temporal-drift" in terms and extension_used,
                         power_limit=power_limit, found=found,
+                        power_limit_offered=power_limit_offered,
                         extension_terms=tuple(terms) if extension_used else ())
 
 
@@ -469,23 +473,32 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, boo
     bright channels' tone curves: where one load gain explains the sweeps
     and the white together and, divided out, leaves no sweep off a power law
     (:func:`~workbench.diagnostics.power_limit.tone_bend_explained`),
-    ``tone-curve-shape`` is its consequence. Returns the results and whether
-    the power limit was identified (the model choice then offers it).
+    ``tone-curve-shape`` is its consequence. Returns the results and
+    ``"identified"`` (the model choice then takes the power limit unless it predicts
+    worse beyond noise), ``"offered"`` where one load gain explains the sweeps and
+    the white but their bend was not a finding (a plan with a few sweep levels: on
+    an adaptive session of a knee the power limit scored 0.013 ΔE00 on hidden colours
+    where the extension scored 0.130; it must then lower the cross-validated error
+    to be taken) or None.
     """
-    if not {"channel-interaction", "tone-curve-shape"} <= set(found):
-        return results, False
+    if "channel-interaction" not in found:
+        return results, None
     interaction = next(r for r in results if r.effect == "channel-interaction")
     if interaction.details.get("channel_specific"):  # the detector's common-gain test
-        return results, False
+        return results, None
     explained, why, _ = tone_bend_explained(context)
     if not explained:
-        return results, False
+        return results, None
+    if "tone-curve-shape" not in found:
+        # the bend is there but below the tone test's threshold (a plan with few sweep
+        # levels): the power limit is offered to the model choice, not identified
+        return results, "offered"
     note = f"the bend that channel-interaction's power limit puts on the sweeps: {why}"
     return tuple(replace(r, evidence=f"{r.evidence}; a consequence of channel-interaction, "
                                      f"{note}",
                          details={**r.details, "consequence_of": "channel-interaction",
                                   "consequence": note})
-                 if r.effect == "tone-curve-shape" else r for r in results), True
+                 if r.effect == "tone-curve-shape" else r for r in results), "identified"
 
 
 def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None
