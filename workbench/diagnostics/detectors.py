@@ -277,7 +277,9 @@ def build_context(fit_session: Session, drift_found: bool | None = None,
     whites = np.all(corrected.rgb >= 255, axis=1) & ~copies
     uncertain = (drift.uncertainty(fit_session.t_s) if (drift is not None and drift_found)
                  else None)
-    sweeps = channel_sweeps(corrected, black, keep=~copies, correction_sd=uncertain)
+    sweeps = channel_sweeps(corrected, black, keep=~copies, correction_sd=uncertain,
+                            times=None if uncertain is None else np.asarray(fit_session.t_s,
+                                                                            dtype=float))
     white = (corrected.XYZ[whites].mean(axis=0) if whites.any()
              else black + sum(s.full_XYZ for s in sweeps))  # ramps only: the additive white
     if load_session is not None:
@@ -687,21 +689,33 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
     black_cov = _mean_covariance(context.noise, context.black, context.black_count)
     u = 1.0 - sweep.drive[usable]
     xy = xy_of(sweep.XYZ[usable])
-    rows, targets = [], []
+    points = int(usable.sum())
+    blocks, covariance = [], np.zeros((2 * points, 2 * points))
+    toward_black = np.zeros((points, 2))  # xy moved per unit drift-correction error
     for i, index in enumerate(np.flatnonzero(usable)):
         subtracted = sweep.XYZ[index]
         total = float(np.sum(subtracted))
         x, y = subtracted[0] / total, subtracted[1] / total
         jacobian = np.array([[1 - x, -x, -x], [-y, 1 - y, -y]]) / total
-        covariance = jacobian @ _mean_covariance(context.noise, subtracted + context.black,
-                                                 int(sweep.counts[index])) @ jacobian.T
-        whitening = np.linalg.inv(np.linalg.cholesky(covariance))
+        covariance[2 * i:2 * i + 2, 2 * i:2 * i + 2] = jacobian @ _mean_covariance(
+            context.noise, subtracted + context.black, int(sweep.counts[index])) @ jacobian.T
         design = np.zeros((2, 9))
         design[0, :3] = [1.0, u[i], u[i] ** 2]
         design[1, 3:6] = [1.0, u[i], u[i] ** 2]
         design[:, 6:] = -jacobian  # xy moves by −J·δK when the black is off by δK
-        rows.append(whitening @ design)
-        targets.append(whitening @ xy[i])
+        blocks.append(design)
+        # a drift correction off by δ scales the black with the light: after the black is
+        # subtracted, δ·K is left, which moves xy by δ·J·K (toward the black's chromaticity)
+        toward_black[i] = jacobian @ context.black
+    if sweep.times is not None and context.drift is not None:
+        # those errors are alike on the levels measured one after another between two
+        # references (DriftCorrection.bridge_covariance): a smooth path, not noise
+        bridge = context.drift.bridge_covariance(sweep.times[usable])
+        covariance += (np.einsum("ia,jb->iajb", toward_black, toward_black)
+                       * bridge[:, None, :, None]).reshape(2 * points, 2 * points)
+    whitening = np.linalg.inv(np.linalg.cholesky(covariance))
+    rows = [whitening @ np.vstack(blocks)]
+    targets = [whitening @ xy.reshape(-1)]
     if context.black_count:
         prior = np.linalg.inv(np.linalg.cholesky(black_cov + 1e-30 * np.eye(3)))
         black_rows = np.zeros((3, 9))
@@ -793,10 +807,14 @@ LACK_OF_FIT = "lack-of-fit"
 
 
 def _fit_shape(form, drive, Y, sd, black_guess, full_guess):
+    """Least squares of ``form`` through the points; ``sd`` per point, or a whitening matrix
+    (the inverse Cholesky factor of the points' covariance) where their errors are correlated."""
     start, low, high = _SHAPE_START[form]
+    whitening = np.asarray(sd) if np.ndim(sd) == 2 else None
 
     def residual(q):
-        return (q[0] + q[1] * _shape(form, drive, q[2:]) - Y) / sd
+        difference = q[0] + q[1] * _shape(form, drive, q[2:]) - Y
+        return difference / sd if whitening is None else whitening @ difference
 
     result = least_squares(residual, x0=[black_guess, full_guess, *start],
                            bounds=([-np.inf, 0.0, *low], [np.inf, np.inf, *high]))
@@ -885,7 +903,15 @@ def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
         drive = np.concatenate([np.zeros(context.black_count), sweep.drive])
         counts = np.concatenate([np.ones(context.black_count), sweep.counts])
         sd = context.noise.sd_Y(Y) / np.sqrt(counts)
-        if sweep.correction_sd is not None:  # a drift correction's own uncertainty
+        if sweep.times is not None and context.drift is not None:
+            # a drift correction's own error, alike on the levels measured one after another
+            # between two references (DriftCorrection.bridge_covariance): one bend, not noise
+            covariance = np.diag(sd ** 2)
+            b = context.black_count
+            covariance[b:, b:] += (context.drift.bridge_covariance(sweep.times)
+                                   * np.outer(Y[b:], Y[b:]))
+            sd = np.linalg.inv(np.linalg.cholesky(covariance))
+        elif sweep.correction_sd is not None:  # a drift correction's own uncertainty
             correction = np.concatenate([np.zeros(context.black_count), sweep.correction_sd])
             sd = np.hypot(sd, correction * Y)
         return _tone_test_points(drive, Y, sd, black[1], float(sweep.full_XYZ[1]),

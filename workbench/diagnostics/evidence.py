@@ -79,6 +79,34 @@ class DriftCorrection:
         out[inside] = (change * np.sqrt(u * (1.0 - u)))[inside]
         return out
 
+    def bridge_covariance(self, t_s) -> np.ndarray:
+        """Relative covariance (n, n) of the correction's errors at times ``t_s`` (n,).
+
+        :meth:`uncertainty`'s change at an unknown moment, carried to pairs: two
+        points of one interval between references, at fractions ``u ≤ v`` of it,
+        are off the ramp together by ``Δ² u (1 − v)`` (a Brownian bridge: a change
+        before both moves both alike), points of different intervals independently.
+        ``Δ`` is the change between the two references as measured, not smoothed: a
+        fast warm-up that the smoother flattens still changed that much somewhere in
+        the interval. The errors of points measured one after another in one interval
+        (a sweep's levels) are alike, so they bend the sweep as one: a test of the
+        sweep's shape must read them as one error, not as independent ones.
+        """
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        out = np.zeros((t.size, t.size))
+        if self.times.size < 2:
+            return out
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+        width = self.times[k + 1] - self.times[k]
+        inside = (t > self.times[0]) & (t < self.times[-1]) & (width > 0)
+        u = np.where(inside, (t - self.times[k]) / np.where(width > 0, width, 1.0), 0.0)
+        change = (np.abs(self.gains[k + 1] - self.gains[k])
+                  / np.abs(self.gains[k + 1] + self.gains[k]) * 2.0)
+        same = inside[:, None] & inside[None, :] & (k[:, None] == k[None, :])
+        low, high = np.minimum.outer(u, u), np.maximum.outer(u, u)
+        out[same] = (change[:, None] ** 2 * low * (1.0 - high))[same]
+        return out
+
     def smoothed_to_noise(self, relative_sd: np.ndarray) -> "DriftCorrection":
         """The correction with its curve smoothed as far as the references' noise allows.
 
@@ -169,6 +197,7 @@ class ChannelSweep:
     full_XYZ: np.ndarray
     counts: np.ndarray | None = None
     correction_sd: np.ndarray | None = None  # relative SD of each level's drift correction
+    times: np.ndarray | None = None  # each level's mean measurement time, where corrected
 
     @property
     def output(self) -> np.ndarray:
@@ -185,11 +214,13 @@ class ChannelSweep:
 
 
 def channel_sweeps(session: Session, black: np.ndarray, keep: np.ndarray | None = None,
-                   correction_sd: np.ndarray | None = None) -> tuple[ChannelSweep, ...]:
+                   correction_sd: np.ndarray | None = None,
+                   times: np.ndarray | None = None) -> tuple[ChannelSweep, ...]:
     """The three black-subtracted sweeps (single-channel rows), rows ``keep`` only.
 
     ``correction_sd``: each row's relative drift-correction uncertainty
     (:meth:`DriftCorrection.uncertainty`); each level gets that of its mean.
+    ``times``: each row's time on the drift correction's basis; each level gets the mean.
     """
     sweeps = []
     keep = np.ones(len(session), dtype=bool) if keep is None else keep
@@ -211,8 +242,11 @@ def channel_sweeps(session: Session, black: np.ndarray, keep: np.ndarray | None 
             # independent (a step between them moves them alike), so the mean keeps the RMS
             level_sd = np.array([np.sqrt(np.mean(rows_sd[inverse == i] ** 2))
                                  for i in range(unique.size)])
+        level_t = (None if times is None else
+                   np.array([np.mean(times[rows][inverse == i]) for i in range(unique.size)]))
         sweeps.append(ChannelSweep(channel=channel, drive=unique / 255.0, XYZ=mean_XYZ,
-                                   full_XYZ=mean_XYZ[-1], counts=counts, correction_sd=level_sd))
+                                   full_XYZ=mean_XYZ[-1], counts=counts, correction_sd=level_sd,
+                                   times=level_t))
     return tuple(sweeps)
 
 
