@@ -674,6 +674,17 @@ def common_gain_test(context: DiagnosisContext) -> CommonGainTest | None:
     return CommonGainTest(gain=gain, chi2=chi2, p_value=f_sf(chi2 / 2, 2, dof), amounts=amounts)
 
 
+BLACK_PRIOR_INFLATION = 9.0
+"""The chromaticity test's prior on the error of the subtracted black is the noise model's
+covariance of the black's mean times this (its SD three times): the floor is estimated from a
+session's dark points and blacks, often one black, and a black read 1.5σ of the true floor off
+in X and Z, against a floor estimated at a third of it, had moved every dark sweep point's xy
+alike and read as a shift (6 of the 11 false `chromaticity-shift` in the 940-session suite, 4
+beside other effects on one display of the peer bench). A real shift is still told from a black
+error by its shape: a black error moves xy as 1/(X + Y + Z), a leak or a desaturation as the
+drive falls (every injected shift of the suite is named as before)."""
+
+
 def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
     """(p, distance, its SE, lowest drive, coefficients (2, 2), z) of one channel, or None.
 
@@ -717,7 +728,8 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
     rows = [whitening @ np.vstack(blocks)]
     targets = [whitening @ xy.reshape(-1)]
     if context.black_count:
-        prior = np.linalg.inv(np.linalg.cholesky(black_cov + 1e-30 * np.eye(3)))
+        prior = np.linalg.inv(np.linalg.cholesky(BLACK_PRIOR_INFLATION * black_cov
+                                                 + 1e-30 * np.eye(3)))
         black_rows = np.zeros((3, 9))
         black_rows[:, 6:] = prior
         rows.append(black_rows)
