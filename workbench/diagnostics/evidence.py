@@ -67,17 +67,27 @@ class DriftCorrection:
         flat) and where neighbouring references agree.
         """
         t = np.atleast_1d(np.asarray(t_s, dtype=float))
-        curve = self.gains if self.smoothed is None else self.smoothed
         out = np.zeros(t.shape)
         if self.times.size < 2:
             return out
+        k, u, inside = self._interval(t)
+        change = self._change(self.gains if self.smoothed is None else self.smoothed, k)
+        out[inside] = (change * np.sqrt(u * (1.0 - u)))[inside]
+        return out
+
+    def _interval(self, t: np.ndarray) -> tuple:
+        """Each time's interval between references ``k``, its fraction ``u`` of it, and whether it
+        lies between the first and the last reference (``inside``; ``u`` is 0 elsewhere)."""
         k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
         width = self.times[k + 1] - self.times[k]
         inside = (t > self.times[0]) & (t < self.times[-1]) & (width > 0)
         u = np.where(inside, (t - self.times[k]) / np.where(width > 0, width, 1.0), 0.0)
-        change = np.abs(curve[k + 1] - curve[k]) / np.abs(curve[k + 1] + curve[k]) * 2.0
-        out[inside] = (change * np.sqrt(u * (1.0 - u)))[inside]
-        return out
+        return k, u, inside
+
+    @staticmethod
+    def _change(curve: np.ndarray, k: np.ndarray) -> np.ndarray:
+        """Relative change of ``curve`` across interval ``k``."""
+        return np.abs(curve[k + 1] - curve[k]) / np.abs(curve[k + 1] + curve[k]) * 2.0
 
     def bridge_covariance(self, t_s) -> np.ndarray:
         """Relative covariance (n, n) of the correction's errors at times ``t_s`` (n,).
@@ -96,12 +106,8 @@ class DriftCorrection:
         out = np.zeros((t.size, t.size))
         if self.times.size < 2:
             return out
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
-        width = self.times[k + 1] - self.times[k]
-        inside = (t > self.times[0]) & (t < self.times[-1]) & (width > 0)
-        u = np.where(inside, (t - self.times[k]) / np.where(width > 0, width, 1.0), 0.0)
-        change = (np.abs(self.gains[k + 1] - self.gains[k])
-                  / np.abs(self.gains[k + 1] + self.gains[k]) * 2.0)
+        k, u, inside = self._interval(t)
+        change = self._change(self.gains, k)
         same = inside[:, None] & inside[None, :] & (k[:, None] == k[None, :])
         low, high = np.minimum.outer(u, u), np.maximum.outer(u, u)
         out[same] = (change[:, None] ** 2 * low * (1.0 - high))[same]

@@ -221,7 +221,8 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     interaction's own term: a physical form against a flexible one, the flexible
     one must win beyond noise (an adaptive session of a chromatic crosstalk,
     19 mixtures among its fit rows, took the sweep correction at 0.25 ± 0.18 and
-    scored 0.18 ΔE00 on hidden colours where the extension scored 0.11). A grey-ramp candidate replaces the model of an identified cause
+    scored 0.18 ΔE00 on hidden colours where the extension scored 0.11). A
+    grey-ramp candidate replaces the model of an identified cause
     (``power-limit``) only beyond noise. And a grey-ramp candidate must also
     predict the rows other than the white references no worse beyond noise than
     the model it would replace (``_without_whites``: it predicts a held-out white
