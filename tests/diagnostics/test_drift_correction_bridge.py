@@ -45,6 +45,6 @@ def test_a_drift_beside_the_sweeps_bends_no_tone_curve_and_moves_no_chromaticity
 
 @pytest.mark.parametrize("seed", [7, 8])
 def test_a_shoulder_beside_a_step_is_still_named(seed):
-    diagnosis = diagnose(generate_session({"tone-curve-shape": "shoulder", "temporal-drift": "step"},
-                                          seed=seed, plan="paper").session)
+    effects = {"tone-curve-shape": "shoulder", "temporal-drift": "step"}
+    diagnosis = diagnose(generate_session(effects, seed=seed, plan="paper").session)
     assert {"tone-curve-shape", "temporal-drift"} <= {f.effect for f in diagnosis.findings}

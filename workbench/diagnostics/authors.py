@@ -155,9 +155,9 @@ def grey_ramp_model(session: Session, white: np.ndarray | None = None,
     with ``axis_ratio``): the model then reproduces the greys and the sweeps,
     and a colour between them by how grey it is (the fade's exponent: the one that
     predicts the fit rows' mixtures best where they hold
-    :data:`MIN_MIXTURES_FOR_EXPONENT`, else :data:`GREYNESS_EXPONENT`). Where a channel's sweep and
-    its grey-ramp curve agree the correction is 1 and the model is the
-    authors'.
+    :data:`MIN_MIXTURES_FOR_EXPONENT`, else :data:`GREYNESS_EXPONENT`). Where a
+    channel's sweep and its grey-ramp curve agree the correction is 1 and the
+    model is the authors'.
 
     Components: ``black-offset`` (the method always has the black),
     ``grey-ramp-linearisation`` and, with the sweeps, ``channel-interaction``.
@@ -203,11 +203,11 @@ GREYNESS_EXPONENT = 0.5
 (:class:`~workbench.display.extended.ChannelInteraction` ``greyness_exponent``) where the fit rows
 hold too few mixtures to choose it. The sweeps and the greys fix the correction on the channel
 axes and on the grey axis; only mixtures tell how it fades between them. On 34 real LCD
-sessions (ArgyllCMS charts: sweeps, a grey ramp and a few hundred mixtures, these held out) the
-linear fade (1) lost to the seed authors' method on 6 sessions by more than 0.02 ΔE00 (0.17 at
-most), a square-root fade gained more in all (held-out mean ΔE00 summed over the sessions: 5.19
-against 3.77 for the linear fade and 4.47 for the square root of the larger other channel) and
-lost on one (0.05); exponents 0.25 and 0.35 lost on none but gained less (4.25, 4.90). The
+sessions (ArgyllCMS charts: sweeps, a grey ramp and a few hundred mixtures, these held out),
+against the grey ramp alone, the linear fade (1) lost on 6 sessions by more than 0.02 ΔE00 (0.17
+at most); a square-root fade gained more in all (held-out mean ΔE00 summed over the sessions:
+5.19 against 3.77 for the linear fade and 4.47 for the square root of the larger other channel)
+and lost on one (0.05); exponents 0.25 and 0.35 lost on none but gained less (4.25, 4.90). The
 sweeps on these panels fall 2–4 % short of the grey ramp's share at mid drive: the shortfall goes
 as soon as a little of the other channels comes up."""
 

@@ -94,7 +94,8 @@ class ChannelInteraction:
     axis_ratio: tuple | None = None
     """Per channel (outputs, ratios): the sweep-to-grey-ramp ratio ``r_c`` at grey-ramp outputs."""
     greyness_exponent: float = 1.0
-    """Sweeps-against-the-grey-ramp form: ``q`` in ``w_c = clip(mean_{o≠c} L_o / L_c, 0, 1)^q``."""
+    """Sweeps-against-the-grey-ramp form: ``q`` in
+    ``w_c = clip(mean_{o≠c} L_o / L_c, 0, 1)^q``."""
     load_weights: tuple | None = None
     """Power-limit form: each channel's share of the load (its share of the white's luminance)."""
 
@@ -255,10 +256,9 @@ class ExtendedDisplay(DisplayModel):
             step = 1e-7
             jacobian = np.stack([(self._reproduced(here + step * np.eye(3)[k]) - error
                                   - flat_target[open_]) / step for k in range(3)], axis=-1)
-            try:
-                delta = np.linalg.solve(jacobian, -error[..., None])[..., 0]
-            except np.linalg.LinAlgError:
-                break
+            # the pseudo-inverse: a colour whose Jacobian is singular (a clipped channel) takes
+            # the least-squares step instead of stopping the others
+            delta = (np.linalg.pinv(jacobian) @ -error[..., None])[..., 0]
             best, best_error = here, error
             best_norm = norm[open_]
             for fraction in (1.0, 0.5, 0.25, 0.125):
