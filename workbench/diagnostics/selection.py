@@ -465,7 +465,7 @@ def _answered_by(candidate: str) -> set:
                        else set())
 
 
-def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, bool]:
+def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, str | None]:
     """Mark a finding that another finding explains as its consequence (``consequence_of``).
 
     A power limit (``channel-interaction`` whose white falls short by one gain
