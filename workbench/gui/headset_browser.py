@@ -114,6 +114,9 @@ class HeadsetBrowser(QObject):
         """The running server's :class:`~workbench.vr.server.ServerStatus` now, or ``None``."""
         return None if self._server is None else self._server.status()
 
+    IN_USE_MESSAGE = "a calibration is showing its patches on the page: cancel it first"
+    """What a page says when the server is asked to stop while :attr:`in_use`."""
+
     @property
     def in_use(self) -> bool:
         """Whether a measurement is showing its patches on the page (the server must not stop)."""

@@ -389,7 +389,7 @@ class ScenePage(QWidget):
             return
         if self.serving_scene:
             if service.in_use:
-                self.headset.show_problem("a calibration is showing its patches on the page: cancel it first")
+                self.headset.show_problem(service.IN_USE_MESSAGE)
                 self.headset_button.setChecked(True)
                 return
             service.stop()

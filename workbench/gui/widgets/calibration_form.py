@@ -499,7 +499,7 @@ class CalibrationForm(QWidget):
             return
         if service.running:
             if service.in_use:
-                self._set_webxr_status("✗ a calibration is showing its patches on the page: cancel it first")
+                self._set_webxr_status(f"✗ {service.IN_USE_MESSAGE}")
                 return
             service.stop()
         else:
