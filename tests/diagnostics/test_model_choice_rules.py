@@ -118,3 +118,27 @@ def test_an_offered_power_limit_must_lower_the_error(given_errors, power_limit_e
                                        extension_terms=("channel-interaction",),
                                        power_limit_offered=True)
     assert (choice.chosen == "power-limit") is taken, choice.reason
+
+
+@pytest.mark.parametrize("others_gain, taken", [(0.0, False), (0.10, True)])
+def test_a_grey_ramp_replaces_an_identified_cause_only_beyond_noise_off_the_whites(
+        given_errors, others_gain, taken):
+    """A power limit identified as the cause is kept against a grey-ramp candidate whose gain
+    is at the white references (a level of its own ramp) and within noise elsewhere (the seed
+    authors' plan holds no mixtures to tell them apart: the sweep correction scored 0.43 ΔE00 on
+    hidden colours where the power limit scored 0.09); a gain beyond noise on the sweeps and
+    greys too replaces it."""
+    rng = np.random.default_rng(8)
+    counts = (60, 40, 8, 0)
+    extension = _errors(rng, 0.60, 0.60, 0.60, 0.0, counts)
+    given_errors["power-limit"] = _errors(rng, 0.20, 0.30, 0.40, 0.0, counts)
+    given_errors["grey-ramp"] = _errors(rng, 0.60, 0.60, 0.60, 0.0, counts)
+    given_errors["grey-ramp+sweeps"] = _errors(rng, 0.20 - others_gain, 0.30 - others_gain,
+                                               0.10, 0.0, counts)
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
+                                       power_limit=True, found=("channel-interaction",),
+                                       extension_terms=("channel-interaction",))
+    assert (choice.chosen == "grey-ramp+sweeps") is taken, choice.reason
+    if not taken:
+        assert choice.chosen == "power-limit"
+        assert "the identified cause: its gain" in choice.reason
