@@ -1,0 +1,72 @@
+"""The drift correction's curve, and the grey-ramp model's black.
+
+The drift curve: ±σ jitter of the references about a trend is averaged out, and a step stays a
+step (a smoother alone blurs it across the references beside it). The grey-ramp model: a black read a
+little below zero (noise about none) is taken as zero, and the greys are read against that same
+black, so the model still reproduces the greys it was built from.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from tests.diagnostics.independent_generator import PAIRED_FORMS, generate_session, hidden_colours
+from workbench.colorimetry import delta_E2000
+from workbench.diagnostics.authors import fit_grey_ramp_linearisation, grey_ramp_model
+from workbench.diagnostics.evidence import DriftCorrection
+
+
+def test_jitter_about_a_decline_is_averaged_out():
+    times = np.arange(12.0)
+    truth = 1.0 - 0.004 * times  # 4.4 % over the session, 11 σ
+    sd = 0.004
+    rms = []
+    for seed in range(20):
+        gains = truth * (1.0 + sd * np.random.default_rng(seed).standard_normal(times.size))
+        curve = DriftCorrection(times, gains, gains).smoothed_to_noise(np.full(times.size, sd))
+        rms.append(np.sqrt(np.mean((curve.gain(times) - truth) ** 2)))
+    # a straight line through 12 references is known to about 0.4 σ; one reference to 1 σ
+    assert np.mean(rms) < 0.6 * sd
+
+
+def test_a_step_stays_a_step():
+    times = np.arange(12.0)
+    truth = np.where(times < 5, 1.03, 1.0)
+    sd = 0.003
+    worst = []
+    for seed in range(20):
+        gains = truth * (1.0 + sd * np.random.default_rng(100 + seed).standard_normal(times.size))
+        curve = DriftCorrection(times, gains, gains).smoothed_to_noise(np.full(times.size, sd))
+        worst.append(np.max(np.abs(curve.gain(times) - truth)))
+    # the references beside the step are not blurred toward each other (that is 5 σ)
+    assert np.median(worst) < 1.5 * sd and np.max(worst) < 3 * sd
+
+
+def test_the_grey_ramp_model_reads_the_greys_against_the_black_it_adds_back():
+    generated = generate_session(PAIRED_FORMS["warm-up beside sweeps"], seed=30006,
+                                 plan="authors-2024")
+    session = generated.session
+    black = np.all(session.rgb == 0, axis=1)
+    # every black read well below zero in Z: noise about none, as a CS-2000 can read it
+    session = replace(session, XYZ=np.where(black[:, None], session.XYZ - [0, 0, 0.05],
+                                            session.XYZ))
+    fit = session.without("validation")
+    model = grey_ramp_model(fit, fit.white_XYZ)
+    assert np.all(model.black >= 0)
+    greys = (fit.rgb[:, 0] == fit.rgb[:, 1]) & (fit.rgb[:, 1] == fit.rgb[:, 2]) & ~np.all(
+        fit.rgb == 0, axis=1) & ~np.all(fit.rgb == 255, axis=1)
+    levels, inverse = np.unique(fit.rgb[greys, 0], return_inverse=True)
+    measured = np.array([fit.XYZ[greys][inverse == k].mean(axis=0) for k in range(levels.size)])
+    predicted = model.forward(np.repeat(levels[:, None], 3, axis=1))
+    # through the greys it was built from (monotone curves: within the greys' own noise)
+    assert np.max(np.abs(predicted - measured)) < 0.002 * fit.white_XYZ[1]
+    # and on colours it never saw it is no worse than the authors' method, which keeps the black
+    rgb = hidden_colours(300, 30006)
+    truth = generated.reference_XYZ(rgb)
+    ours = np.mean(delta_E2000(model.forward(rgb), truth, fit.white_XYZ))
+    theirs = np.mean(delta_E2000(fit_grey_ramp_linearisation(session).forward(rgb), truth,
+                                 fit.white_XYZ))
+    assert ours <= theirs + 0.01
