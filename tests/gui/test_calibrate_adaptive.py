@@ -96,7 +96,9 @@ def test_a_simulated_adaptive_run_shows_the_plan_growing_its_reasons_accuracy_an
 
     def shown(state):
         show(state)
-        seen.append((state, page.plan_label.text(), page.progress.maximum()))
+        # the page processes events while it fits the label (its width), so a later state can be
+        # shown inside this call: pair the text with the state the page says it shows
+        seen.append((page.plan_state, page.plan_label.text(), page.progress.maximum()))
 
     page._on_plan_state = shown  # start() connects the worker to it
     qtbot.mouseClick(page.start_button, Qt.MouseButton.LeftButton)
