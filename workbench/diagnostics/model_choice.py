@@ -229,7 +229,8 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     the primaries and the load; on the seed authors' plan (no mixtures among the
     fit rows) the sweep correction took a quadratic power limit and a knee on the
     whites alone (0.24 and 0.19 better there, worse on the sweeps) and scored 0.43
-    and 0.45 ΔE00 on hidden colours where the power limit scored 0.09 and 0.13. And a grey-ramp candidate must also
+    and 0.45 ΔE00 on hidden colours where the power limit scored 0.09 and 0.13.
+    And a grey-ramp candidate must also
     predict the rows other than the white references no worse beyond noise than
     the model it would replace (``_without_whites``: it predicts a held-out white
     from the other whites, the top level of its ramp). Where the fit rows hold
