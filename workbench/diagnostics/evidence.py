@@ -141,7 +141,7 @@ class DriftCorrection:
         the sweeps and a step beside a bluish black on the three plans; the
         paper plan's warm-ups, declines, steps and wanders; 100 sessions) the
         hidden-colour mean ΔE00 of the exported model went from 0.143 to 0.131,
-        better by more than 0.01 on 34 sessions and worse on 9 (0.03 at most).
+        better by more than 0.01 on 33 sessions and worse on 9 (0.03 at most).
         Tried and not kept: a first-difference smoother and an exponential
         settling curve as further families (0.130 and 0.130, more sessions
         changed both ways).
