@@ -265,19 +265,20 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         needed = (CV_Z * standard_error if noise_tested else
                   -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES and power_limit else 0.0)
         others = paired_gain(_without_whites(chosen_errors), _without_whites(errors))
-        if (gain > needed and np.isfinite(scores[name]) and name in GREY_RAMP_CANDIDATES
-                and chosen in IDENTIFIED_CANDIDATES and not others[0] > CV_Z * others[1]):
-            notes.append(f"{name} does not beat the {chosen}, the identified cause: its gain "
-                         f"({gain:.3f}) is at the white references (a level of its own ramp), "
-                         f"and on the other rows it is not beyond noise ({others[0]:.3f} ± "
-                         f"{others[1]:.3f})")
-            continue
-        if (gain > needed and np.isfinite(scores[name]) and name in GREY_RAMP_CANDIDATES
-                and others[0] < -CV_Z * others[1]):
-            notes.append(f"{name} does not beat the {chosen}: its gain ({gain:.3f}) is at the white "
-                         "references alone (a level of its own ramp) and it predicts the other "
-                         f"rows worse beyond noise ({others[0]:.3f} ± {others[1]:.3f})")
-            continue
+        if gain > needed and np.isfinite(scores[name]) and name in GREY_RAMP_CANDIDATES:
+            # its gain may be at the whites, a level of its own ramp: the other rows decide
+            if chosen in IDENTIFIED_CANDIDATES and not others[0] > CV_Z * others[1]:
+                notes.append(f"{name} does not beat the {chosen}, the identified cause: its gain "
+                             f"({gain:.3f}) is at the white references (a level of its own "
+                             f"ramp), and on the other rows it is not beyond noise "
+                             f"({others[0]:.3f} ± {others[1]:.3f})")
+                continue
+            if others[0] < -CV_Z * others[1]:
+                notes.append(f"{name} does not beat the {chosen}: its gain ({gain:.3f}) is at the "
+                             "white references alone (a level of its own ramp) and it predicts "
+                             f"the other rows worse beyond noise ({others[0]:.3f} ± "
+                             f"{others[1]:.3f})")
+                continue
         mixtures = (_mixtures_only(chosen_errors), _mixtures_only(errors))
         if (gain > needed and np.isfinite(scores[name]) and name in NOISE_TESTED_CANDIDATES
                 and None not in mixtures and paired_gain(*mixtures)[0] < 0):
