@@ -16,7 +16,7 @@ import pytest
 from tests.diagnostics.independent_generator import PAIRED_FORMS, generate_session, hidden_colours
 from workbench.colorimetry import delta_E2000
 from workbench.diagnostics.authors import fit_grey_ramp_linearisation, grey_ramp_model
-from workbench.diagnostics.evidence import DriftCorrection
+from workbench.diagnostics.evidence import DriftCorrection, partial_greys
 
 
 def test_jitter_about_a_decline_is_averaged_out():
@@ -56,8 +56,7 @@ def test_the_grey_ramp_model_reads_the_greys_against_the_black_it_adds_back():
     fit = session.without("validation")
     model = grey_ramp_model(fit, fit.white_XYZ)
     assert np.all(model.black >= 0)
-    greys = (fit.rgb[:, 0] == fit.rgb[:, 1]) & (fit.rgb[:, 1] == fit.rgb[:, 2]) & ~np.all(
-        fit.rgb == 0, axis=1) & ~np.all(fit.rgb == 255, axis=1)
+    greys = partial_greys(fit.rgb)
     levels, inverse = np.unique(fit.rgb[greys, 0], return_inverse=True)
     measured = np.array([fit.XYZ[greys][inverse == k].mean(axis=0) for k in range(levels.size)])
     predicted = model.forward(np.repeat(levels[:, None], 3, axis=1))
