@@ -54,7 +54,7 @@ import numpy as np
 from tests.diagnostics.independent_generator import FORMS, PAIRED_FORMS, generate_session, hidden_colours
 
 __all__ = ["PLANS", "HIDDEN_COLOURS", "TIME_SHARE", "MEAN_MARGIN", "INTERACTION_FORMS",
-           "INTERACTION_GAIN", "FIRST_SEED", "DRIFT_MET_SIGMA", "scenarios", "radiance_of_XYZ", "PlanOutcome",
+           "INTERACTION_GAIN", "FIRST_SEED", "SPEED_MODES", "DRIFT_MET_SIGMA", "scenarios", "radiance_of_XYZ", "PlanOutcome",
            "measure_plan", "run_plans_bench", "summarize", "table", "markdown", "PlansBenchResult",
            "outcomes_from_json"]
 
@@ -66,6 +66,11 @@ INTERACTION_GAIN = 0.30
 INTERACTION_FORMS = ("power-limit-quadratic", "knee", "drive-crosstalk")
 """The interaction shapes the paper plan cannot identify (issue 18's acceptance)."""
 FIRST_SEED = 40000
+SPEED_MODES = {"normal": 0, "fast": 1}
+"""The CS-2000's automatic speed modes the bench can run in (``--speed-mode``): normal integrates
+up to 242 s in the dark, fast up to 16 s. Fast is another dark end: every patch costs about the
+same, so the adaptive plan's fixed core and its validation colours weigh more against the paper
+plan's time (its time cap then leaves fewer validation colours)."""
 DRIFT_MET_SIGMA = 3.0
 """A drift counts as met by a session (:meth:`PlanOutcome.met`) where the display changed during
 it by at least this many times its repeatability. The bench runs a drift on the ``paper``
@@ -129,13 +134,14 @@ class _GeneratorDisplay:
         return self.display.XYZ(self.rgb[None, :], np.array([self.clock.now()]))[0]
 
 
-def _paper_seconds(display_XYZ, seed: int) -> float:
+def _paper_seconds(display_XYZ, seed: int, speed_mode: int = 0) -> float:
     """The ``paper`` plan's modelled instrument time on a display (``display_XYZ(rgb)``)."""
     from instruments.cs2000 import measurement_timing
     from workbench.measurement.plans import measurement_plan
 
     rgb = np.array([p.rgb for p in measurement_plan("paper", seed).patches], dtype=float)
-    return float(sum(measurement_timing(max(Y, 0.0)).duration_s for Y in display_XYZ(rgb)[:, 1]))
+    return float(sum(measurement_timing(max(Y, 0.0), mode=speed_mode).duration_s
+                     for Y in display_XYZ(rgb)[:, 1]))
 
 
 @dataclass(frozen=True)
@@ -194,8 +200,12 @@ def _ci95(values) -> tuple:
     return (float(values.mean() - half), float(values.mean() + half))
 
 
-def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_dir: Path):
+def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_dir: Path,
+                 speed_mode: int = 0):
     """Measure ``plan`` on the scenario's display through the emulator; (session, truth, decisions).
+
+    ``speed_mode`` is set on the instrument before the run (``SPMS``; 0 normal, 1 fast: another
+    dark end, :data:`SPEED_MODES`), and the session clock follows it.
 
     ``truth(rgb)`` is the display's noiseless XYZ in the state of the session's last two whites.
     Returns ``(session, truth, decisions, end_s, drift_change, repeatability)``: ``drift_change``
@@ -212,11 +222,11 @@ def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_di
     from workbench.measurement.simulation import InstrumentTimingModel, ModelledSessionClock
 
     clock = ModelledSessionClock()
-    timing = InstrumentTimingModel()
+    timing = InstrumentTimingModel(speed_mode=speed_mode)
     if kind == "generator":
         generated = generate_session(effects, seed=seed, plan="paper")
         generator = generated.display
-        generator.session_s = _paper_seconds(generator.light, seed)
+        generator.session_s = _paper_seconds(generator.light, seed, speed_mode)
         shown = _GeneratorDisplay(generated, clock)
         display, repeatability = shown, float(generated.noise)
 
@@ -226,7 +236,8 @@ def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_di
             return radiance
     else:
         headset = SimulatedHeadset(effects, clock=clock.now)
-        headset.session_length_s = _paper_seconds(lambda rgb: radiance_to_XYZ(headset.radiance(rgb)), seed)
+        headset.session_length_s = _paper_seconds(lambda rgb: radiance_to_XYZ(headset.radiance(rgb)), seed,
+                                                  speed_mode)
         display, repeatability = SimulatedPatchDisplay(headset), 0.001
 
         def radiance_source():
@@ -244,6 +255,8 @@ def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_di
     server = serve_on_pty(emulator)
     try:
         with open_cs2000(server.port, timeout_s=10.0) as meter:
+            if speed_mode:
+                meter.set_speed_mode(speed_mode)
             run = MeasurementRun.start(out_dir, run_plan, display, meter, settings=extra,
                                        clock=lambda header, journal: clock, planner=planner)
             for event in run.events():
@@ -271,7 +284,7 @@ def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_di
     return session, truth, len(journal.decisions), end_s, change, repeatability
 
 
-def _outcome(plan, scenario, kind, effects, seed, strict=False) -> PlanOutcome:
+def _outcome(plan, scenario, kind, effects, seed, strict=False, speed_mode=0) -> PlanOutcome:
     from workbench.colorimetry import delta_E2000
     from workbench.diagnostics import diagnose
 
@@ -280,7 +293,7 @@ def _outcome(plan, scenario, kind, effects, seed, strict=False) -> PlanOutcome:
     try:
         with TemporaryDirectory(prefix="plans-bench-") as folder:
             session, truth, decisions, end_s, change, repeatability = measure_plan(
-                plan, scenario, kind, effects, seed, Path(folder) / "session")
+                plan, scenario, kind, effects, seed, Path(folder) / "session", speed_mode)
         diagnosis = diagnose(session)
     except Exception as error:  # a bench reports a failing session and goes on
         if strict:
@@ -308,15 +321,16 @@ def _outcome(plan, scenario, kind, effects, seed, strict=False) -> PlanOutcome:
 
 
 def run_plans_bench(sessions: int = 2, names=None, plans=PLANS, first_seed: int = FIRST_SEED,
-                    progress=None, strict: bool = False) -> list[PlanOutcome]:
-    """Every (scenario, seed, plan): ``sessions`` seeds per scenario, one display per seed."""
+                    progress=None, strict: bool = False, speed_mode: int = 0) -> list[PlanOutcome]:
+    """Every (scenario, seed, plan): ``sessions`` seeds per scenario, one display per seed, the
+    instrument in ``speed_mode`` (:data:`SPEED_MODES`)."""
     known = scenarios()
     chosen = known if names is None else {name: known[name] for name in names}
     jobs = [(name, first_seed + k, plan) for name in chosen for k in range(sessions) for plan in plans]
     outcomes = []
     for number, (name, seed, plan) in enumerate(jobs):
         kind, effects = chosen[name]
-        outcomes.append(_outcome(plan, name, kind, effects, seed, strict))
+        outcomes.append(_outcome(plan, name, kind, effects, seed, strict, speed_mode))
         if progress is not None:
             progress(number + 1, len(jobs), outcomes[-1])
     return outcomes
@@ -498,6 +512,8 @@ def main(argv=None) -> int:
     parser.add_argument("--sessions", type=int, default=2)
     parser.add_argument("--scenarios", nargs="+", help=f"of {', '.join(scenarios())}")
     parser.add_argument("--first-seed", type=int, default=FIRST_SEED)
+    parser.add_argument("--speed-mode", choices=SPEED_MODES, default="normal",
+                        help="the instrument's speed mode (another dark end: fast integrates 16 s at most)")
     parser.add_argument("--plans", nargs="+", choices=PLANS, default=list(PLANS),
                         help="measure only these plans (pool with --load for a table beside the others)")
     parser.add_argument("--json", metavar="FILE")
@@ -509,7 +525,7 @@ def main(argv=None) -> int:
         print(PlansBenchResult(outcomes_from_json(args.load), args.markdown).summary())
         return 0
     outcomes = run_plans_bench(args.sessions, args.scenarios, plans=tuple(args.plans),
-                               first_seed=args.first_seed,
+                               first_seed=args.first_seed, speed_mode=SPEED_MODES[args.speed_mode],
                                progress=lambda d, t, o: print(f"\r{d}/{t} {o.scenario} {o.plan}".ljust(60),
                                                               end="", file=sys.stderr, flush=True))
     print(file=sys.stderr)

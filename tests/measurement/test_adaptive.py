@@ -18,14 +18,18 @@ from instruments.headset import SimulatedHeadset
 from workbench.cli import main
 from workbench.measurement.adaptive import (
     DRIFT_REFERENCE_INTERVAL_S,
+    MIN_VALIDATION,
+    TIME_CAP_SHARE,
     AdaptivePlanner,
     AdaptiveSettings,
     adaptive_core_plan,
     plan_state,
     replay_decisions,
+    validation_count,
 )
 from workbench.measurement.journal import read_journal
 from workbench.measurement.patch_cost import fit_patch_cost
+from workbench.measurement.plans import measurement_plan
 from workbench.measurement.runner import JOURNAL_NAME, MeasurementRun, PatchMeasured
 from workbench.measurement.simulation import ModelledSessionClock
 
@@ -211,11 +215,14 @@ def test_bench_plans_measures_only_the_plans_named(capsys, monkeypatch):
 
     asked = {}
     monkeypatch.setattr(plans_bench, "run_plans_bench",
-                        lambda sessions, names, plans: asked.update(plans=plans) or [])
+                        lambda sessions, names, plans, speed_mode:
+                        asked.update(plans=plans, speed_mode=speed_mode) or [])
     monkeypatch.setattr(plans_bench, "PlansBenchResult",
                         lambda outcomes, markdown: SimpleNamespace(summary=lambda: "table"))
     assert main(["bench", "plans", "--plans", "adaptive", "paper"]) == 0
-    assert asked["plans"] == ("adaptive", "paper")
+    assert asked == {"plans": ("adaptive", "paper"), "speed_mode": 0}
+    assert main(["bench", "plans", "--plans", "adaptive", "--speed-mode", "fast"]) == 0
+    assert asked == {"plans": ("adaptive",), "speed_mode": 1}
     assert main(["bench", "plans", "--plans", "adaptive", "fast"]) == 2
     assert "--plans: unknown 'fast'; use some of paper, paper+greys, adaptive" in capsys.readouterr().err
 
@@ -239,3 +246,46 @@ def test_no_fold_holds_every_white():
     for k in range(FOLDS):
         assert (white & (fold != k)).any(), f"fold {k}'s training set has no white"
     assert (fold >= 0).sum() >= len(rgb) - 1  # one white kept in every training set, no more
+
+
+def test_validation_count_keeps_the_session_within_the_cap():
+    costs = [10.0] * 30
+    # 100 s of core, a 5 s white: a cap of 330 s leaves room for 22 colours
+    assert validation_count(30, 100.0, 5.0, costs, 1000.0) == int((TIME_CAP_SHARE * 1000 - 105) // 10)
+    assert validation_count(30, 100.0, 5.0, costs, 10_000.0) == 30  # room for all: all
+    assert validation_count(30, 400.0, 5.0, costs, 1000.0) == MIN_VALIDATION  # never fewer
+    assert validation_count(5, 400.0, 5.0, costs, 1000.0) == 5  # unless fewer were asked for
+
+
+class FlatMeter(ScriptedMeter):
+    """Every patch 3 s, dark or bright (a short dark end: an instrument in a fast mode)."""
+
+    def __init__(self, headset, clock):
+        super().__init__(headset)
+        self.clock = clock
+
+    def measure(self, progress=None, cancel=None):
+        measured = super().measure(progress, cancel)
+        self.clock.advance(3.0)
+        return SimpleNamespace(**vars(measured), measurement_time_s=2)
+
+
+def test_where_every_patch_costs_the_same_fewer_validation_colours_keep_the_time_share(tmp_path):
+    settings = AdaptiveSettings(seed=SEED)  # no budget: a share of the paper plan's time
+    headset = SimulatedHeadset({})
+    clock = ModelledSessionClock()
+    run = MeasurementRun.start(tmp_path / "s", adaptive_core_plan(SEED), RecordingDisplay(headset),
+                               FlatMeter(headset, clock), settings={"adaptive": settings.to_json()},
+                               clock=lambda h, j: clock, planner=AdaptivePlanner(settings))
+    for _ in run.events():
+        pass
+    journal = read_journal(tmp_path / "s" / JOURNAL_NAME)
+    stop = journal.decisions[-1]
+    measured = sum(p[0] == "validation" for p in stop["patches"])
+    assert MIN_VALIDATION <= measured < settings.validation
+    assert all(d["validation"] == measured for d in journal.decisions)
+    assert f"{measured} of the {settings.validation} asked for" in stop["reason"]
+    paper_s = 3.0 * len(measurement_plan("paper", SEED))
+    assert sum(r.duration_s for r in journal.records) <= TIME_CAP_SHARE * paper_s + 3.0
+    for journaled, replayed in replay_decisions(journal):
+        assert replayed["patches"] == journaled["patches"] and replayed["reason"] == journaled["reason"]

@@ -201,6 +201,9 @@ def _plans_arguments(parser: argparse.ArgumentParser) -> None:
                              "the simulated headset)")
     parser.add_argument("--plans", nargs="+", metavar="PLAN",
                         help="measure only these plans (default: paper, paper+greys, adaptive)")
+    parser.add_argument("--speed-mode", choices=("normal", "fast"), default="normal",
+                        help="the CS-2000's speed mode for every plan (fast: 16 s at most in the dark, "
+                             "another dark end; default normal, up to 242 s)")
     parser.add_argument("--markdown", action="store_true", help="print the docs' table")
 
 
@@ -224,7 +227,8 @@ def _plans_run(args: argparse.Namespace):
         raise InputError(f"--plans: unknown {', '.join(map(repr, unknown_plans))}; use some of "
                          f"{', '.join(bench.PLANS)}")
     outcomes = bench.run_plans_bench(args.sessions, args.scenarios,
-                                     plans=tuple(args.plans) if args.plans else bench.PLANS)
+                                     plans=tuple(args.plans) if args.plans else bench.PLANS,
+                                     speed_mode=bench.SPEED_MODES[args.speed_mode])
     return bench.PlansBenchResult(outcomes, args.markdown)
 
 

@@ -331,6 +331,10 @@ class AdaptiveEstimate:
         sets it, from the modelled times rather than the times it will measure).
     budget_given : bool
         Whether the budget is the user's.
+    validation : int
+        Validation colours it ends with: those asked for, fewer where they would take the session
+        past :data:`~workbench.measurement.adaptive.TIME_CAP_SHARE` of ``paper_s``
+        (:func:`~workbench.measurement.adaptive.validation_count`).
     """
 
     core: PlanEstimate
@@ -338,25 +342,34 @@ class AdaptiveEstimate:
     paper_s: float
     budget_s: float
     budget_given: bool
+    validation: int
 
 
 def adaptive_estimate(setup: CalibrationSetup) -> AdaptiveEstimate:
     """The adaptive plan's core, budget and validation time on the simulated headset of ``setup``'s effects."""
-    from workbench.measurement.adaptive import validation_patches
+    from workbench.measurement.adaptive import validation_count, validation_patches
 
     seed = 0 if setup.seed is None else setup.seed
     settings = setup.adaptive_settings(seed)
     headset = SimulatedHeadset(setup.effects or {})
     core = setup.plan()
     core_estimate = PlanEstimate(len(core), core.counts(), modelled_plan_duration_s(core, headset))
-    closing = MeasurementPlan("validation", (*validation_patches(seed, settings.validation),
-                                             *core.patches[:1]))  # the validation colours and a white
-    validation_s = modelled_plan_duration_s(closing, headset)
     paper_s = modelled_plan_duration_s(measurement_plan("paper", seed), headset)
+    asked = validation_patches(seed, settings.validation)
+    count = settings.validation
+    if settings.budget_min is None:
+        def seconds(patch):
+            return modelled_plan_duration_s(MeasurementPlan("one", (patch,)), headset)
+
+        count = validation_count(settings.validation, core_estimate.instrument_s,
+                                 seconds(core.patches[0]), [seconds(p) for p in asked], paper_s)
+    closing = MeasurementPlan("validation", (*asked[:count], *core.patches[:1]))  # and a white
+    validation_s = modelled_plan_duration_s(closing, headset)
     if settings.budget_min is not None:
-        return AdaptiveEstimate(core_estimate, validation_s, paper_s, 60.0 * settings.budget_min, True)
+        return AdaptiveEstimate(core_estimate, validation_s, paper_s, 60.0 * settings.budget_min, True,
+                                count)
     budget = max(PAPER_SHARE * paper_s, core_estimate.instrument_s + validation_s)
-    return AdaptiveEstimate(core_estimate, validation_s, paper_s, budget, False)
+    return AdaptiveEstimate(core_estimate, validation_s, paper_s, budget, False, count)
 
 
 def cs2000_ports() -> list:

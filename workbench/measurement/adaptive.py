@@ -69,7 +69,8 @@ from workbench.measurement.plans import MeasurementPlan, Patch, measurement_plan
 from workbench.measurement.planning_model import PlanningModel, PlanningRows, planning_colours
 
 __all__ = ["ADAPTIVE_PLAN", "CORE_LEVELS", "CORE_GREYS", "DRIFT_REFERENCE_INTERVAL_S",
-           "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "PAPER_SHARE", "MIN_ADAPTIVE_S", "CHECKPOINT_GROWTH",
+           "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "MIN_VALIDATION", "PAPER_SHARE", "TIME_CAP_SHARE",
+           "MIN_ADAPTIVE_S", "CHECKPOINT_GROWTH", "validation_count",
            "SWEEP_STEP", "GREY_STEP", "MIXTURE_CUBE", "AdaptiveSettings", "Decision", "PlanState",
            "AdaptivePlanner", "adaptive_core_plan", "plan_state", "replay_decisions",
            "validation_patches", "held_out_summary"]
@@ -115,6 +116,19 @@ DEFAULT_VALIDATION = 30
 PAPER_SHARE = 0.30
 """Without ``--budget-min``: the budget is this share of the ``paper`` plan's predicted time."""
 
+TIME_CAP_SHARE = 0.33
+"""Without ``--budget-min``, the whole session (the core, the decisions, the validation colours and
+the last white) is held within this share of the ``paper`` plan's predicted time: where the core
+and the validation colours asked for would pass it, fewer of them are measured
+(:func:`validation_count`). The core is a fixed list of patches and the validation colours are
+random colours, about as bright as the paper plan's own; where every patch costs about the same
+(a bright lit black, an instrument's fast mode, a short dark end) the core is about a quarter of
+the paper plan's time and 30 validation colours another seventh, past a third of it."""
+
+MIN_VALIDATION = 12
+"""The fewest validation colours the time cap leaves (unless fewer were asked for): the 95 %
+confidence interval of their mean ΔE00 is then about 1.6 times as wide as with 30."""
+
 MIN_ADAPTIVE_S = 0.0
 """Without ``--budget-min``, the budget is never less than the core, the validation colours and this
 long for decisions. 0: where the paper plan's predicted share is spent by the core, the plan stops
@@ -134,6 +148,20 @@ MIXTURE_CUBE = (0, 64, 128, 192, 255)
 _WHITE, _BLACK = (255, 255, 255), (0, 0, 0)
 _CHANNELS = ("red", "green", "blue")
 _RAMP_KINDS = ("ramp-r", "ramp-g", "ramp-b")
+
+
+def validation_count(requested: int, elapsed_s: float, white_s: float, costs_s, paper_s: float) -> int:
+    """How many of the ``requested`` validation colours fit the time cap (:data:`TIME_CAP_SHARE`).
+
+    ``elapsed_s`` is the session so far (the core), ``white_s`` the last white's predicted cost,
+    ``costs_s`` the predicted seconds of each validation colour in order (the first ``n`` are
+    measured), ``paper_s`` the ``paper`` plan's predicted time. The most that keep the session
+    within the cap, never fewer than :data:`MIN_VALIDATION` (or ``requested``, if fewer).
+    """
+    costs = np.asarray(costs_s, dtype=float)[:requested]
+    fits = elapsed_s + white_s + np.concatenate([[0.0], np.cumsum(costs)]) <= TIME_CAP_SHARE * paper_s
+    most = int(np.flatnonzero(fits).max()) if fits.any() else 0
+    return int(max(most, min(MIN_VALIDATION, requested)))
 
 
 def adaptive_core_plan(seed: int) -> MeasurementPlan:
@@ -240,6 +268,8 @@ class Decision:
         Measurement records in the journal before it (replays start there).
     findings : tuple of str
         The latest checkpoint diagnosis's findings.
+    validation : int or None
+        Validation colours the stop measures (set at the first decision, :func:`validation_count`).
     """
 
     number: int
@@ -253,6 +283,7 @@ class Decision:
     budget_s: float
     measured_before: int
     findings: tuple = ()
+    validation: int | None = None
 
     def to_json(self) -> dict:
         def rounded(value):
@@ -264,7 +295,7 @@ class Decision:
                 "predicted_after_dE00": rounded(self.predicted_after_dE00),
                 "cost_s": rounded(self.cost_s), "elapsed_s": rounded(self.elapsed_s),
                 "budget_s": rounded(self.budget_s), "measured_before": self.measured_before,
-                "findings": list(self.findings)}
+                "findings": list(self.findings), "validation": self.validation}
 
 
 @dataclass(frozen=True)
@@ -389,18 +420,22 @@ class AdaptivePlanner:
             rgb = np.array([p.rgb for p in patches], dtype=float)
             return float(cost.seconds(np.maximum(model.predict(rgb)[:, 1], 0.0)).sum())
 
-        reserve = seconds(list(self.validation) + [Patch("white", _WHITE)])
-        budget = self._budget_s(decisions, seconds, elapsed, reserve)
+        paper_s = None
+        if self.settings.budget_min is None and not decisions:
+            paper_s = seconds(list(measurement_plan_paper(self.settings.seed).patches))
+        validation, fewer = self._validation(decisions, seconds, elapsed, paper_s)
+        reserve = seconds(list(validation) + [Patch("white", _WHITE)])
+        budget = self._budget_s(decisions, paper_s, elapsed, reserve)
         common = dict(number=number, predicted_dE00=before, elapsed_s=elapsed, budget_s=budget,
-                      measured_before=measured_before, findings=findings)
+                      measured_before=measured_before, findings=findings, validation=len(validation))
 
         def stop(why: str) -> Decision:
-            patches = tuple(self.validation) + (Patch("white", _WHITE),)
+            patches = tuple(validation) + (Patch("white", _WHITE),)
             return Decision(action="stop", patches=patches, predicted_after_dE00=None,
                             cost_s=seconds(patches),
                             reason=(f"stop: {why}; predicted held-out ΔE00 {before:.3f}. Now the "
-                                    f"{len(self.validation)} validation colours (seeded, never used "
-                                    "to fit or to choose) and a last white"), **common)
+                                    f"{len(validation)} validation colours (seeded, never used "
+                                    f"to fit or to choose{fewer}) and a last white"), **common)
 
         target = self.settings.target_dE00
         if target is not None and before <= target:
@@ -492,13 +527,31 @@ class AdaptivePlanner:
         patches = tuple(p for p in follow_up.patches if p.kind in ("grey", "mixture"))
         return findings, tuple((p, ", ".join(follow_up.serves)) for p in patches)
 
-    def _budget_s(self, decisions, seconds, elapsed: float, reserve: float) -> float:
+    def _budget_s(self, decisions, paper_s, elapsed: float, reserve: float) -> float:
         if self.settings.budget_min is not None:
             return 60.0 * float(self.settings.budget_min)
         if decisions and decisions[0].get("budget_s") is not None:
             return float(decisions[0]["budget_s"])
-        return max(PAPER_SHARE * seconds(list(measurement_plan_paper(self.settings.seed).patches)),
-                   elapsed + reserve + MIN_ADAPTIVE_S)
+        return max(PAPER_SHARE * paper_s, elapsed + reserve + MIN_ADAPTIVE_S)
+
+    def _validation(self, decisions, seconds, elapsed: float, paper_s) -> tuple:
+        """(the validation colours the stop will measure, what to say where they are fewer than
+        asked): the count the first decision set; at the first decision, without
+        ``--budget-min``, as many as the time cap allows (:func:`validation_count`)."""
+        requested = self.settings.validation
+        if decisions:
+            count = int(decisions[0].get("validation") or requested)  # journals before the cap: all
+        elif paper_s is None:
+            count = requested
+        else:
+            costs = [seconds([p]) for p in self.validation]
+            count = validation_count(requested, elapsed, seconds([Patch("white", _WHITE)]), costs,
+                                     paper_s)
+        if count >= requested:
+            return self.validation, ""
+        return self.validation[:count], (
+            f"; {count} of the {requested} asked for: with all of them the session would pass "
+            f"{100 * TIME_CAP_SHARE:.0f} % of the paper plan's predicted time")
 
     @staticmethod
     def _since_white_s(journal: Journal) -> float:

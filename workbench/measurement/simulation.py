@@ -51,12 +51,18 @@ class InstrumentTimingModel:
     ----------
     angle : int
         Measuring-angle code (0 = 1°, 1 = 0.2°, 2 = 0.1°), as the emulator measured.
+    speed_mode : int
+        0 normal (up to 242 s in the dark, the default) or 1 fast (up to 16 s), as set on the
+        instrument (``SPMS``): another dark end, where every patch costs about the same.
     """
 
-    def __init__(self, angle: int = 0):
+    def __init__(self, angle: int = 0, speed_mode: int = 0):
         if angle not in LUMINANCE_RANGE_CD_M2:
             raise ValueError(f"angle must be 0 (1°), 1 (0.2°) or 2 (0.1°), got {angle!r}")
+        if speed_mode not in (0, 1):
+            raise ValueError(f"speed_mode must be 0 (normal) or 1 (fast), got {speed_mode!r}")
         self.angle = angle
+        self.speed_mode = speed_mode
 
     def measurement_s(self, radiance: np.ndarray) -> float:
         """Pre-measurement plus measurement time (s) at real timing for ``radiance`` (401,).
@@ -77,7 +83,7 @@ class InstrumentTimingModel:
         if luminance > maximum:
             raise ValueError(f"the emulator refuses {luminance:.4g} cd/m² (ER10): it is outside the "
                              f"instrument's range (at most {maximum:g} cd/m² with the internal ND filter)")
-        return measurement_timing(luminance, angle=self.angle).duration_s
+        return measurement_timing(luminance, mode=self.speed_mode, angle=self.angle).duration_s
 
 
 class ModelledSessionClock:

@@ -72,7 +72,13 @@ from workbench.gui.calibration_setup import (
     plan_estimate,
     check_tcp_display,
 )
-from workbench.measurement.adaptive import ADAPTIVE_PLAN, DEFAULT_VALIDATION, PAPER_SHARE, adaptive_core_plan
+from workbench.measurement.adaptive import (
+    ADAPTIVE_PLAN,
+    DEFAULT_VALIDATION,
+    PAPER_SHARE,
+    TIME_CAP_SHARE,
+    adaptive_core_plan,
+)
 from workbench.gui.screen_overlay import identify_screens
 from workbench.gui.workers import CallWorker
 from workbench.measurement.runner import format_duration
@@ -638,7 +644,10 @@ class CalibrationForm(QWidget):
             + ("" if estimate.budget_given else f": {PAPER_SHARE * 100:.0f} % of the paper plan's "
                f"{format_duration(estimate.paper_s)}, never less than the core and the validation colours")
             + ")" + (f", the target ΔE00 {setup.target_dE00:g}" if setup.target_dE00 else "")
-            + f" or the floor of improvement per minute; it ends with {setup.validation} validation colours and "
-            f"a white (about {format_duration(estimate.validation_s)}), kept in reserve in the budget.")
+            + f" or the floor of improvement per minute; it ends with {estimate.validation} validation colours and "
+            f"a white (about {format_duration(estimate.validation_s)}), kept in reserve in the budget"
+            + ("." if estimate.validation >= setup.validation else
+               f"; {estimate.validation} of the {setup.validation} asked for, as all of them would take the "
+               f"session past {TIME_CAP_SHARE * 100:.0f} % of the paper plan's time."))
         return (f"Core of <b>{estimate.core.patches} patches</b> ({core}), grows to {budget}, "
-                f"{setup.validation} validation colours included")
+                f"{estimate.validation} validation colours included")
