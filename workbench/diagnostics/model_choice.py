@@ -47,7 +47,7 @@ from workbench.diagnostics.cross_validation import (
 )
 from workbench.diagnostics.detectors import DiagnosisContext
 from workbench.diagnostics.evidence import partial_greys
-from workbench.diagnostics.power_limit import power_limit_model
+from workbench.diagnostics.power_limit import MIN_REFIT_SWEEP_LEVELS, power_limit_model
 from workbench.display import DisplayModel
 from workbench.errors import InputError
 
@@ -150,7 +150,9 @@ def fit_candidate(name: str, context: DiagnosisContext, found=()) -> DisplayMode
         raise InputError(f"unknown candidate {name!r}; use one of "
                          f"{', '.join(ALTERNATIVE_CANDIDATES)}")
     if name == "power-limit":  # the black only where black-offset was found (``found``)
-        return power_limit_model(context, with_black="black-offset" in found)
+        # offered only where the whole session identified it; a fold's rows may hold fewer levels
+        return power_limit_model(context, with_black="black-offset" in found,
+                                 min_levels=MIN_REFIT_SWEEP_LEVELS)
     return grey_ramp_model(context.fit, context.white, with_sweeps=name == "grey-ramp+sweeps")
 
 

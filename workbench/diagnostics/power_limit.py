@@ -41,10 +41,22 @@ from workbench.diagnostics.significance import critical_p, f_sf
 
 __all__ = ["PowerLimitFit", "fit_power_limit", "tone_bend_explained", "undimmed_sweeps_tone_test",
            "power_limit_model",
-           "MIN_SWEEP_LEVELS"]
+           "MIN_SWEEP_LEVELS", "MIN_REFIT_SWEEP_LEVELS"]
 
 MIN_SWEEP_LEVELS = 8
-"""Sweep levels per channel the joint fit needs (the paper's plan has 51)."""
+"""Sweep levels per channel (below full drive) the joint fit needs to identify a power limit (the
+paper's plan has 51, the adaptive plan's core 10)."""
+
+MIN_REFIT_SWEEP_LEVELS = 5
+"""Sweep levels per channel a power limit already identified on the whole session needs to be
+refitted on a cross-validation fold's training rows (:func:`power_limit_model` with
+``min_levels``; :func:`~workbench.diagnostics.model_choice.fit_candidate`). The folds are dealt
+out in row order, so where whites interleave a sweep a fold can hold out three of the adaptive
+core's ten levels of one channel: at :data:`MIN_SWEEP_LEVELS` that fold could not be fitted and
+the identified cause lost the model choice to a flexible model (a knee in the CS-2000's fast
+mode, with a white after every eight core patches: 0.145 mean ΔE00 on hidden colours against
+0.013). Five levels and the white still fit the model's few parameters (a power law per channel
+and one load gain)."""
 
 
 @dataclass(frozen=True)
@@ -99,11 +111,12 @@ def _rows(context: DiagnosisContext):
             np.concatenate(sd), white, white_sd)
 
 
-def fit_power_limit(context: DiagnosisContext) -> PowerLimitFit | None:
-    """The joint power-law + load-gain fit (module doc), or None without the rows it needs."""
+def fit_power_limit(context: DiagnosisContext, min_levels: int = MIN_SWEEP_LEVELS) -> PowerLimitFit | None:
+    """The joint power-law + load-gain fit (module doc), or None without the rows it needs
+    (a white, and ``min_levels`` sweep levels below full drive of every channel)."""
     if context.white_count == 0 or len(context.sweeps) != 3:
         return None
-    if any((s.drive < 1).sum() < MIN_SWEEP_LEVELS for s in context.sweeps):
+    if any((s.drive < 1).sum() < min_levels for s in context.sweeps):
         return None
     channel, drive, Y, sd, white, white_sd = _rows(context)
     full = np.array([s.full_XYZ[1] for s in context.sweeps])
@@ -232,7 +245,7 @@ def tone_bend_explained(context: DiagnosisContext, fit: PowerLimitFit | None = N
 
 
 def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = None,
-                      with_black: bool = True):
+                      with_black: bool = True, min_levels: int = MIN_SWEEP_LEVELS):
     """The extended model whose interaction term is the fitted power limit (module doc).
 
     Power laws of the undimmed outputs, the measured primaries' chromaticities
@@ -241,7 +254,9 @@ def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = Non
     ``load_weights``): it reproduces the dimmed full-drive primaries, the
     sweeps' bend and the white with one cause. ``with_black`` False (no
     ``black-offset`` finding): the black is zero, as in the paper's model,
-    rather than the black rows' noise.
+    rather than the black rows' noise. ``min_levels``: the sweep levels per
+    channel the fit needs (:data:`MIN_REFIT_SWEEP_LEVELS` to refit an
+    identified power limit on a fold).
 
     Raises
     ------
@@ -253,9 +268,10 @@ def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = Non
     from workbench.display.tone_curves import PowerCurve
     from workbench.errors import InputError
 
-    fit = fit_power_limit(context) if fit is None else fit
+    fit = fit_power_limit(context, min_levels) if fit is None else fit
     if fit is None:
-        raise InputError("a power limit needs every channel swept at 8 levels or more and a white")
+        raise InputError(f"a power limit needs every channel swept at {min_levels} levels or more "
+                         "below full drive, and a white")
     full = np.array([s.full_XYZ for s in context.sweeps])
     black = (np.maximum(context.black + fit.black_offset_Y * context.white / context.white[1], 0)
              if with_black else np.zeros(3))
