@@ -579,12 +579,13 @@ def greys_against_sum(context: DiagnosisContext) -> GreysAgainstSum | None:
     # between two references) on the grey and on each sweep point, relative to each
     drifting = context.drift_found and context.drift is not None and context.fit.t_s is not None
     grey_u = (context.drift.uncertainty(context.fit.t_s[rows]) if drifting else np.zeros(n))
+    unexplained = unexplained_gain_variance(context)  # a drift not found: a gain on each reading
     covariance = np.zeros((3 * n, 3 * n))
     for i in range(n):
-        block = noise.covariance(grey_XYZ[i]) + grey_u[i] ** 2 * np.outer(grey_XYZ[i],
-                                                                           grey_XYZ[i])
+        block = noise.covariance(grey_XYZ[i]) + (grey_u[i] ** 2 + unexplained) * np.outer(
+            grey_XYZ[i], grey_XYZ[i])
         for sweep, part in zip(context.sweeps, sums[i]):
-            block = block + noise.covariance(part + context.black)
+            block = block + noise.covariance(part + context.black) + unexplained * np.outer(part, part)
             if sweep.correction_sd is not None:
                 u = sweep.correction_sd[int(np.argmin(np.abs(sweep.drive
                                                             - rgb[rows[i], 0] / 255.0)))]
@@ -617,7 +618,32 @@ def _white_against_sum(context: DiagnosisContext):
     measured += [(s.full_XYZ + context.black, s.full_count, 1.0) for s in context.sweeps]
     covariance = sum(w * _mean_covariance(noise, XYZ, n) for XYZ, n, w in measured)
     chromatic = sum(w * _mean_chromaticity_covariance(noise, XYZ, n) for XYZ, n, w in measured)
+    drifting = unexplained_gain_variance(context)
+    if drifting > 0:  # the primaries were read at other moments than the whites
+        covariance = covariance + drifting * (
+            np.outer(context.white, context.white) / max(context.white_count, 1)
+            + sum(np.outer(s.full_XYZ, s.full_XYZ) for s in context.sweeps))
     return white, summed, covariance, chromatic
+
+
+def unexplained_gain_variance(context: DiagnosisContext) -> float:
+    """Relative variance of the display's output over the session that no drift correction takes
+    out: where ``temporal-drift`` was not found, the white references' scatter beyond their noise
+    (0 where it was found, the rows then being corrected, or where the whites scatter no more
+    than noise).
+
+    A warm-up too slow or too noisy for the drift test still moves every reading with it, so a
+    primary read at one moment and a white or grey read at another differ by the change between
+    them: the additivity tests (the white against R+G+B, the greys against their channels'
+    sweeps) carry it as a gain on each reading. Without it, an adaptive session's warm-up (2.5 %
+    over six whites at 0.34 % noise, the drift test at z 2.1, short of its 2.33) was named a
+    channel interaction: its primaries were read early and dim, its whites later.
+    """
+    drift = context.drift
+    if context.drift_found or drift is None or drift.gains.size < 3:
+        return 0.0
+    relative_sd = context.noise.sd_Y(drift.luminances) / drift.luminances
+    return max(0.0, float(np.var(drift.gains, ddof=1) - np.mean(relative_sd ** 2)))
 
 
 CHANNEL_SPECIFIC_ALPHA = 0.001
