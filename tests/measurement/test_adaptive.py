@@ -49,9 +49,14 @@ class TimedMeter(ScriptedMeter):
 
     def measure(self, progress=None, cancel=None):
         measured = super().measure(progress, cancel)
+        duration_s, countdown_s = self.seconds()
+        self.clock.advance(duration_s)
+        return SimpleNamespace(**vars(measured), measurement_time_s=countdown_s)
+
+    def seconds(self) -> tuple:
+        """(seconds the patch takes, the countdown announced) for the patch shown."""
         timing = measurement_timing(radiance_to_luminance(self.headset.current_radiance()))
-        self.clock.advance(timing.duration_s)
-        return SimpleNamespace(**vars(measured), measurement_time_s=timing.measurement_s)
+        return timing.duration_s, timing.measurement_s
 
 
 def _run(out, cancel_after=None, resume=False):
@@ -257,17 +262,11 @@ def test_validation_count_keeps_the_session_within_the_cap():
     assert validation_count(5, 400.0, 5.0, costs, 1000.0) == 5  # unless fewer were asked for
 
 
-class FlatMeter(ScriptedMeter):
+class FlatMeter(TimedMeter):
     """Every patch 3 s, dark or bright (a short dark end: an instrument in a fast mode)."""
 
-    def __init__(self, headset, clock):
-        super().__init__(headset)
-        self.clock = clock
-
-    def measure(self, progress=None, cancel=None):
-        measured = super().measure(progress, cancel)
-        self.clock.advance(3.0)
-        return SimpleNamespace(**vars(measured), measurement_time_s=2)
+    def seconds(self) -> tuple:
+        return 3.0, 2
 
 
 def test_where_every_patch_costs_the_same_fewer_validation_colours_keep_the_time_share(tmp_path):
