@@ -288,3 +288,39 @@ def test_where_every_patch_costs_the_same_fewer_validation_colours_keep_the_time
     assert sum(r.duration_s for r in journal.records) <= TIME_CAP_SHARE * paper_s + 3.0
     for journaled, replayed in replay_decisions(journal):
         assert replayed["patches"] == journaled["patches"] and replayed["reason"] == journaled["reason"]
+
+
+def _core_model(effects, seed):
+    """The planning model of the adaptive core measured noiselessly on a generated display, the
+    display, and the paper plan's colours."""
+    from tests.diagnostics.independent_generator import generate_session
+    from workbench.measurement.planning_model import PlanningModel, PlanningRows, planning_colours
+
+    display = generate_session(effects, seed=seed).display
+    core = adaptive_core_plan(seed)
+    rgb = np.array([p.rgb for p in core.patches], dtype=float)
+    rows = PlanningRows(rgb=rgb, XYZ=display.light(rgb), kind=np.array([p.kind for p in core.patches]))
+    model = PlanningModel(rows, lambda Y: 0.001 * np.ones_like(np.asarray(Y, dtype=float)), 0.001,
+                          planning_colours(seed))
+    paper = np.array([p.rgb for p in measurement_plan("paper", seed).patches], dtype=float)
+    return model, display, paper
+
+
+@pytest.mark.parametrize("form", ["soft-toe", "shoulder"])
+def test_the_paper_plans_dark_sweep_points_are_predicted_from_the_greys(form):
+    from workbench.measurement.adaptive import paper_luminance
+
+    model, display, paper = _core_model({"tone-curve-shape": form}, 0)
+    dark = ((paper > 0).sum(axis=1) == 1) & (paper.max(axis=1) < 32)  # below the core's sweeps
+    true = display.light(paper[dark])[:, 1]
+    surrogate = np.maximum(model.predict(paper[dark])[:, 1], 1e-9)
+    corrected = np.maximum(paper_luminance(model, paper)[dark], 1e-9)
+    assert np.mean(np.abs(np.log(corrected / true))) < 0.5 * np.mean(np.abs(np.log(surrogate / true)))
+
+
+def test_on_a_clean_display_the_paper_plan_is_predicted_as_the_surrogate_does():
+    from workbench.measurement.adaptive import paper_luminance
+
+    model, display, paper = _core_model({}, 0)
+    surrogate = np.maximum(model.predict(paper)[:, 1], 0.0)
+    assert np.allclose(paper_luminance(model, paper), surrogate, rtol=0.05, atol=1e-3)
