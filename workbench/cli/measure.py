@@ -192,7 +192,9 @@ def register(subparsers) -> None:
                         help="with --plan adaptive: stop once the predicted held-out mean ΔE00 is at or below T")
     parser.add_argument("--validation", type=int, metavar="N",
                         help="with --plan adaptive: validation colours measured at the end (default 30; "
-                             "the held-out score is given with its 95 %% confidence interval)")
+                             "without --budget-min, fewer, never under 12, where all of them would take the "
+                             "session past 33 %% of the paper plan's time; the held-out score is given with "
+                             "its 95 %% confidence interval)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--resume", action="store_true",
                         help="continue the run journaled in DIR (failed patches are measured again)")
