@@ -23,7 +23,7 @@ Displays:
   display's XYZ exactly; :func:`radiance_of_XYZ`), the emulator's gain noise
   set to the session's drawn noise ``a``. A drift runs on the session
   clock with the time constant of the ``paper`` plan's modelled duration on
-  that display, for every plan;
+  that display in normal speed mode, for every plan and speed mode;
 * the simulated headset (``instruments/headset.py``), clean and with a
   10 % channel interaction (its power limit), as ``measure --simulate``
   measures it.
@@ -70,7 +70,10 @@ SPEED_MODES = {"normal": 0, "fast": 1}
 """The CS-2000's automatic speed modes the bench can run in (``--speed-mode``): normal integrates
 up to 242 s in the dark, fast up to 16 s. Fast is another dark end: every patch costs about the
 same, so the adaptive plan's fixed core and its validation colours weigh more against the paper
-plan's time (its time cap then leaves fewer validation colours)."""
+plan's time (its time cap then leaves fewer validation colours). A display's drift keeps the
+time scale it has in normal mode: a warm-up is the display's, not the instrument's (run on the
+fast paper plan's 21 minutes, a warm-up or a step ran most of its course inside the adaptive
+session's seven)."""
 DRIFT_MET_SIGMA = 3.0
 """A drift counts as met by a session (:meth:`PlanOutcome.met`) where the display changed during
 it by at least this many times its repeatability. The bench runs a drift on the ``paper``
@@ -205,7 +208,9 @@ def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_di
     """Measure ``plan`` on the scenario's display through the emulator; (session, truth, decisions).
 
     ``speed_mode`` is set on the instrument before the run (``SPMS``; 0 normal, 1 fast: another
-    dark end, :data:`SPEED_MODES`), and the session clock follows it.
+    dark end, :data:`SPEED_MODES`), and the session clock follows it. A drift keeps its time
+    scale (the paper plan's duration in normal speed): how fast a display warms up is the
+    display's, not the instrument's.
 
     ``truth(rgb)`` is the display's noiseless XYZ in the state of the session's last two whites.
     Returns ``(session, truth, decisions, end_s, drift_change, repeatability)``: ``drift_change``
@@ -226,7 +231,7 @@ def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_di
     if kind == "generator":
         generated = generate_session(effects, seed=seed, plan="paper")
         generator = generated.display
-        generator.session_s = _paper_seconds(generator.light, seed, speed_mode)
+        generator.session_s = _paper_seconds(generator.light, seed)  # the display's, whatever the speed
         shown = _GeneratorDisplay(generated, clock)
         display, repeatability = shown, float(generated.noise)
 
@@ -236,8 +241,7 @@ def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_di
             return radiance
     else:
         headset = SimulatedHeadset(effects, clock=clock.now)
-        headset.session_length_s = _paper_seconds(lambda rgb: radiance_to_XYZ(headset.radiance(rgb)), seed,
-                                                  speed_mode)
+        headset.session_length_s = _paper_seconds(lambda rgb: radiance_to_XYZ(headset.radiance(rgb)), seed)
         display, repeatability = SimulatedPatchDisplay(headset), 0.001
 
         def radiance_source():
