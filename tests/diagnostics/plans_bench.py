@@ -137,14 +137,14 @@ class _GeneratorDisplay:
         return self.display.XYZ(self.rgb[None, :], np.array([self.clock.now()]))[0]
 
 
-def _paper_seconds(display_XYZ, seed: int, speed_mode: int = 0) -> float:
-    """The ``paper`` plan's modelled instrument time on a display (``display_XYZ(rgb)``)."""
+def _paper_seconds(display_XYZ, seed: int) -> float:
+    """The ``paper`` plan's modelled instrument time on a display (``display_XYZ(rgb)``) in normal
+    speed mode: the time scale of the display's drift, whatever the instrument's speed."""
     from instruments.cs2000 import measurement_timing
     from workbench.measurement.plans import measurement_plan
 
     rgb = np.array([p.rgb for p in measurement_plan("paper", seed).patches], dtype=float)
-    return float(sum(measurement_timing(max(Y, 0.0), mode=speed_mode).duration_s
-                     for Y in display_XYZ(rgb)[:, 1]))
+    return float(sum(measurement_timing(max(Y, 0.0)).duration_s for Y in display_XYZ(rgb)[:, 1]))
 
 
 @dataclass(frozen=True)
@@ -231,7 +231,7 @@ def measure_plan(plan: str, scenario: str, kind: str, effects, seed: int, out_di
     if kind == "generator":
         generated = generate_session(effects, seed=seed, plan="paper")
         generator = generated.display
-        generator.session_s = _paper_seconds(generator.light, seed)  # the display's, whatever the speed
+        generator.session_s = _paper_seconds(generator.light, seed)
         shown = _GeneratorDisplay(generated, clock)
         display, repeatability = shown, float(generated.noise)
 
