@@ -59,6 +59,29 @@ def test_power_law_fit_and_r_squared():
     assert gamma == pytest.approx(2.2, abs=1e-6) and r2 == pytest.approx(1.0)
 
 
+def test_noise_weighted_power_law_fit():
+    drive = np.linspace(0.02, 1, 50)
+    gamma, r2 = fit_power_law(drive, drive ** 2.2, weighting="noise")
+    assert gamma == pytest.approx(2.2, abs=1e-6) and r2 == pytest.approx(1.0)
+    with pytest.raises(InputError, match="unknown gamma weighting 'log'; use one of luminance, noise"):
+        fit_power_law(drive, drive ** 2.2, weighting="log")
+
+
+def test_noise_weighted_gamma_is_closer_on_ten_levels_with_relative_noise():
+    """With relative noise on ten sweep levels, the noise-weighted γ is the better estimate: in
+    luminance the brightest levels decide it (and their noise is the largest in absolute)."""
+    drive = np.array([32, 64, 96, 128, 160, 192, 208, 224, 236, 246, 255]) / 255.0
+    rng = np.random.default_rng(7)
+    errors = {"luminance": [], "noise": []}
+    for _ in range(200):
+        response = drive ** 2.4 * (1 + 0.003 * rng.standard_normal(drive.size))
+        response = response / response[-1]
+        for weighting in errors:
+            errors[weighting].append(fit_power_law(drive, response, weighting)[0] - 2.4)
+    rms = {k: float(np.sqrt(np.mean(np.square(v)))) for k, v in errors.items()}
+    assert rms["noise"] < 0.75 * rms["luminance"], rms
+
+
 @pytest.mark.parametrize("model", [TRUE, SRGBDisplay(), SRGBDisplay(Y_white=250.0)])
 def test_round_trip_within_half_a_count_in_gamut(model, rng):
     dac = rng.uniform(0, 255, (20000, 3))

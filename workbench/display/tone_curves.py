@@ -39,6 +39,7 @@ from workbench.errors import InputError
 
 __all__ = [
     "ToneCurve",
+    "noise_weights",
     "PowerCurve",
     "GOGCurve",
     "ExtendedPowerCurve",
@@ -108,9 +109,16 @@ def _positive(name: str, value: float, form: str) -> float:
     return value
 
 
-def _weights(output: np.ndarray) -> np.ndarray:
-    # relative noise with a floor: bright levels are known to ~0.2 %, dark ones to ~1e-4 of full
-    return 1.0 / (0.002 * np.abs(output) + 1e-4)
+def noise_weights(output) -> np.ndarray:
+    """Least-squares weights of normalized outputs: one over a spectroradiometer's noise.
+
+    Relative noise with a floor: bright levels are known to about 0.2 %, dark ones to about
+    1e-4 of full drive (a CS-2000's repeatability and its dark end).
+    """
+    return 1.0 / (0.002 * np.abs(np.asarray(output, dtype=float)) + 1e-4)
+
+
+_weights = noise_weights
 
 
 @dataclass(frozen=True)
