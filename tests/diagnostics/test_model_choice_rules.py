@@ -27,6 +27,7 @@ def given_errors(monkeypatch):
     """choose_model with each candidate's cross-validated errors taken from a dict."""
     table = {}
     monkeypatch.setattr(model_choice, "has_grey_ramp", lambda context: True)
+    monkeypatch.setattr(model_choice, "has_sparse_sweep", lambda context: True)
 
     def errors_of(context, fit, drift):
         # the candidate's name is bound as the lambda's default argument
@@ -142,3 +143,47 @@ def test_a_grey_ramp_replaces_an_identified_cause_only_beyond_noise_off_the_whit
     if not taken:
         assert choice.chosen == "power-limit"
         assert "the identified cause: its gain" in choice.reason
+
+
+@pytest.mark.parametrize("gain, taken", [(0.03, True), (0.0005, False)])
+def test_a_weighted_gamma_must_beat_the_baseline_beyond_noise(given_errors, gain, taken):
+    rng = np.random.default_rng(8)
+    baseline = _errors(rng, 0.20, 0.20, 0.10, 0.0)
+    scatter = 0.01 * rng.standard_normal(baseline[0].size)  # the paired difference's noise
+    given_errors["weighted-gamma"] = (baseline[0] - gain + scatter, baseline[1])
+    given_errors["weighted-gamma+greys"] = (baseline[0] + 0.05, baseline[1])
+    given_errors["grey-ramp"] = given_errors["grey-ramp+sweeps"] = (baseline[0] + 0.1, baseline[1])
+    choice = model_choice.choose_model(object(), "baseline", baseline, baseline, drift=False)
+    assert choice.chosen == ("weighted-gamma" if taken else "baseline"), choice.reason
+    assert set(choice.cv_mean_dE00) >= {"weighted-gamma", "weighted-gamma+greys"}
+
+
+@pytest.mark.parametrize("current, found", [("extension", ("black-offset",)),
+                                            ("baseline", ("temporal-drift",))])
+def test_weighted_gammas_are_tried_only_where_the_baseline_stands_without_a_drift(
+        given_errors, current, found):
+    """Where term selection chose the extension, or a drift was found (its gain error in time is
+    not the noise the weights describe), the weighted gammas are not candidates."""
+    rng = np.random.default_rng(9)
+    current_errors = _errors(rng, 0.20, 0.20, 0.10, 0.0)
+    given_errors["weighted-gamma"] = given_errors["weighted-gamma+greys"] = (
+        current_errors[0] - 0.1, current_errors[1])
+    given_errors["grey-ramp"] = given_errors["grey-ramp+sweeps"] = (current_errors[0] + 0.1,
+                                                                    current_errors[1])
+    choice = model_choice.choose_model(object(), current, current_errors, current_errors,
+                                       drift=False, found=found)
+    assert choice.chosen == current
+    assert not set(choice.cv_mean_dE00) & set(model_choice.WEIGHTED_CANDIDATES)
+
+
+def test_weighted_gammas_are_not_tried_on_dense_sweeps(given_errors, monkeypatch):
+    """On the paper plan's 51 levels a channel the paper's own fit stands (SPARSE_SWEEP_LEVELS)."""
+    monkeypatch.setattr(model_choice, "has_sparse_sweep", lambda context: False)
+    rng = np.random.default_rng(10)
+    baseline = _errors(rng, 0.20, 0.20, 0.10, 0.0)
+    given_errors["weighted-gamma"] = given_errors["weighted-gamma+greys"] = (baseline[0] - 0.1,
+                                                                            baseline[1])
+    given_errors["grey-ramp"] = given_errors["grey-ramp+sweeps"] = (baseline[0] + 0.1, baseline[1])
+    choice = model_choice.choose_model(object(), "baseline", baseline, baseline, drift=False)
+    assert choice.chosen == "baseline"
+    assert not set(choice.cv_mean_dE00) & set(model_choice.WEIGHTED_CANDIDATES)

@@ -56,6 +56,7 @@ from workbench.diagnostics.evidence import partial_greys
 from workbench.diagnostics.power_limit import tone_bend_explained
 from workbench.diagnostics.model_choice import (
     ALTERNATIVE_CANDIDATES,
+    WEIGHTED_CANDIDATES,
     ModelChoice,
     choose_model,
     fit_candidate,
@@ -460,6 +461,8 @@ def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_
 
 def _answered_by(candidate: str) -> set:
     """Named effects an alternative candidate models (its black, its curves, its interaction)."""
+    if candidate in WEIGHTED_CANDIDATES:  # the paper's model: no term of any effect
+        return set()
     answered = {"black-offset", "tone-curve-shape"}
     return answered | ({"channel-interaction"} if candidate in ("grey-ramp+sweeps", "power-limit")
                        else set())
