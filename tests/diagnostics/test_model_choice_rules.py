@@ -187,3 +187,14 @@ def test_weighted_gammas_are_not_tried_on_dense_sweeps(given_errors, monkeypatch
     choice = model_choice.choose_model(object(), "baseline", baseline, baseline, drift=False)
     assert choice.chosen == "baseline"
     assert not set(choice.cv_mean_dE00) & set(model_choice.WEIGHTED_CANDIDATES)
+
+
+@pytest.mark.parametrize("levels, sparse", [((10, 10, 12), True), ((50, 50, 50), False),
+                                            ((1, 1, 1), False), ((10, 10, 30), False), ((), False)])
+def test_sparse_sweeps_are_five_to_twenty_five_levels_a_channel(levels, sparse):
+    """A chart's one or two ramp levels a channel leave a power law nothing to weigh; the paper
+    plan's fifty are dense: the weighted candidates are tried on neither."""
+    from types import SimpleNamespace
+
+    sweeps = [SimpleNamespace(drive=np.append(np.linspace(0.1, 0.95, n), 1.0)) for n in levels]
+    assert model_choice.has_sparse_sweep(SimpleNamespace(sweeps=sweeps)) is sparse
