@@ -9,20 +9,22 @@ builds the whole model from it. So the exported model is chosen among
 :data:`MODEL_CANDIDATES` by the same K-fold cross-validation of the fit rows
 (same folds, same per-group mean ΔE00; the validation rows are never read):
 
-=====================  ========================================
-``baseline``           the paper's gamma + 3×3;
-``weighted-gamma``     the same model, each γ fitted with the instrument's noise weights
-                       (relative, with a floor in the dark) instead of in luminance; tried
-                       where term selection kept the baseline;
-``extension``          the extension with the terms selection kept (where it has any);
-``grey-ramp``          the authors' grey-ramp linearisation, exportable;
-``grey-ramp+sweeps``   the same, corrected toward each channel's own sweep as a colour
-                       leaves the grey axis (it reproduces greys and sweeps both);
-``power-limit``        where the diagnosis found the sweeps' bend to be a power limit's
-                       (:mod:`workbench.diagnostics.power_limit`): power laws of the undimmed
-                       outputs and one load gain; offered too where one load gain explains
-                       the sweeps and the white though their bend was no finding.
-=====================  ========================================
+========================  ========================================
+``baseline``              the paper's gamma + 3×3;
+``weighted-gamma``        the same model, each γ fitted with the instrument's noise weights
+                          (relative, with a floor in the dark) instead of in luminance;
+``weighted-gamma+greys``  the same, each γ fitted to its sweep and its share of the greys
+                          (both tried only where term selection kept the baseline, no drift
+                          was found and the sweeps are sparse: :data:`WEIGHTED_CANDIDATES`);
+``extension``             the extension with the terms selection kept (where it has any);
+``grey-ramp``             the authors' grey-ramp linearisation, exportable;
+``grey-ramp+sweeps``      the same, corrected toward each channel's own sweep as a colour
+                          leaves the grey axis (it reproduces greys and sweeps both);
+``power-limit``           where the diagnosis found the sweeps' bend to be a power limit's
+                          (:mod:`workbench.diagnostics.power_limit`): power laws of the undimmed
+                          outputs and one load gain; offered too where one load gain explains
+                          the sweeps and the white though their bend was no finding.
+========================  ========================================
 
 The grey-ramp candidates exist where the fit rows hold at least
 :data:`~workbench.diagnostics.authors.MIN_GREYS` grey levels. Where
@@ -55,9 +57,10 @@ from workbench.diagnostics.power_limit import MIN_REFIT_SWEEP_LEVELS, power_limi
 from workbench.display import DisplayModel, GammaMatrixDisplay
 from workbench.errors import InputError
 
-__all__ = ["MODEL_CANDIDATES", "GREY_RAMP_CANDIDATES", "WEIGHTED_CANDIDATES", "ALTERNATIVE_CANDIDATES",
-           "IDENTIFIED_CANDIDATES", "NOISE_TESTED_CANDIDATES", "SPARSE_SWEEP_LEVELS", "ModelChoice",
-           "choose_model", "fit_candidate", "has_grey_ramp", "has_sparse_sweep"]
+__all__ = ["MODEL_CANDIDATES", "GREY_RAMP_CANDIDATES", "WEIGHTED_CANDIDATES",
+           "ALTERNATIVE_CANDIDATES", "IDENTIFIED_CANDIDATES", "NOISE_TESTED_CANDIDATES",
+           "SPARSE_SWEEP_LEVELS", "ModelChoice", "choose_model", "fit_candidate", "has_grey_ramp",
+           "has_sparse_sweep"]
 
 MODEL_CANDIDATES = {
     "baseline": "the paper's gamma + 3×3",
@@ -264,9 +267,9 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     model unless it predicts the fit rows worse beyond noise
     (:data:`IDENTIFIED_CANDIDATES`); ``weighted-gamma`` (and ``weighted-gamma+greys`` where
     the rows hold a grey ramp), tried only where term selection kept the baseline, no drift
-    was found and the sweeps are sparse, replaces it where it lowers the cross-validated error beyond noise
-    (:data:`WEIGHTED_CANDIDATES`); ``grey-ramp`` replaces the model chosen so far where it lowers the
-    cross-validated error; ``grey-ramp+sweeps`` replaces the model chosen so
+    was found and the sweeps are sparse, replaces it where it lowers the cross-validated
+    error beyond noise (:data:`WEIGHTED_CANDIDATES`); ``grey-ramp`` replaces the model chosen
+    so far where it lowers the cross-validated error; ``grey-ramp+sweeps`` replaces the model chosen so
     far only where it lowers it by more than
     :data:`~workbench.diagnostics.cross_validation.CV_Z` standard errors of
     the paired per-row difference (:data:`NOISE_TESTED_CANDIDATES`): on a
