@@ -305,11 +305,12 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         scores["extension"] = score(current_errors)
     chosen, chosen_errors = current, current_errors
     notes = []
+    greys = has_grey_ramp(context)
     names = ((("power-limit",) if power_limit or power_limit_offered else ())
-             + (WEIGHTED_CANDIDATES[:1 + has_grey_ramp(context)]
+             + (WEIGHTED_CANDIDATES[:1 + greys]
                 if (current == "baseline" and "temporal-drift" not in found
                     and has_sparse_sweep(context)) else ())
-             + (GREY_RAMP_CANDIDATES if has_grey_ramp(context) else ()))
+             + (GREY_RAMP_CANDIDATES if greys else ()))
     for name in names:
         errors = cross_validated_errors_of(
             context, lambda fold_context, _baseline, name=name: fit_candidate(

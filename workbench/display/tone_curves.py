@@ -118,8 +118,6 @@ def noise_weights(output) -> np.ndarray:
     return 1.0 / (0.002 * np.abs(np.asarray(output, dtype=float)) + 1e-4)
 
 
-_weights = noise_weights
-
 
 @dataclass(frozen=True)
 class PowerCurve(ToneCurve):
@@ -145,7 +143,7 @@ class PowerCurve(ToneCurve):
         """Weighted least squares in ``γ`` on [0.2, 8] (one dimension: bounded Brent search)."""
         from scipy.optimize import minimize_scalar
 
-        w = _weights(output)
+        w = noise_weights(output)
         drive = np.asarray(drive, dtype=float)
         result = minimize_scalar(lambda g: float(np.sum(((drive ** g - output) * w) ** 2)),
                                  bounds=(0.2, 8.0), method="bounded",
@@ -180,7 +178,7 @@ class GOGCurve(ToneCurve):
 
     @classmethod
     def fit(cls, drive, output):
-        w = _weights(output)
+        w = noise_weights(output)
 
         def residual(p):
             return (np.maximum(0.0, (1 - p[0]) * drive + p[0]) ** p[1] - output) * w
@@ -231,7 +229,7 @@ class ExtendedPowerCurve(ToneCurve):
 
     @classmethod
     def fit(cls, drive, output):
-        w = _weights(output)
+        w = noise_weights(output)
         d = np.maximum(drive, _HALF_COUNT)
 
         def curve(p):  # β = t·γ/(2 ln 510) with t ≤ 1 keeps the curve monotone
@@ -357,7 +355,7 @@ def bic(curve: ToneCurve, drive, output) -> float:
     leave-one-out score — is computed on the same ``n``; lower is better.
     """
     drive, output = _interior(*_check(drive, output))
-    residual = (curve.forward(drive) - output) * _weights(output)
+    residual = (curve.forward(drive) - output) * noise_weights(output)
     n = drive.size
     rss = max(float(residual @ residual), 1e-300)
     return n * np.log(rss / n) + curve.n_parameters * np.log(n)
@@ -393,7 +391,7 @@ def _spline_loo_bic(drive, output) -> float:
         keep = np.ones(drive.size, dtype=bool)
         keep[i] = False
         curve = SplineCurve.fit(drive[keep], output[keep])
-        residual.append((curve.forward(drive[i]) - output[i]) * _weights(output[i:i + 1])[0])
+        residual.append((curve.forward(drive[i]) - output[i]) * noise_weights(output[i:i + 1])[0])
     residual = np.asarray(residual)
     n = max(residual.size, 1)
     rss = max(float(residual @ residual), 1e-300)
