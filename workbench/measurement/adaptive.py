@@ -387,14 +387,15 @@ def paper_luminance(model: PlanningModel, rgb) -> np.ndarray:
     (:mod:`~workbench.measurement.patch_cost`) interpolates between a patch of no light and the
     darkest lit one.
     """
+    from workbench.diagnostics.evidence import partial_greys
+
     rgb = np.atleast_2d(np.asarray(rgb, dtype=float))
     Y = np.maximum(model.predict(rgb)[:, 1], 0.0)
     rows = model.rows
     black_Y = float(model.black[1])
     level = rgb.max(axis=1)
     single = (rgb > 0).sum(axis=1) == 1
-    greys = ((rows.rgb[:, 0] == rows.rgb[:, 1]) & (rows.rgb[:, 1] == rows.rgb[:, 2])
-             & (rows.rgb[:, 0] > 0) & (rows.rgb[:, 0] < 255))
+    greys = partial_greys(rows.rgb)
     if not greys.any():
         return Y
     grey_levels = rows.rgb[greys, 0]
