@@ -1,7 +1,9 @@
 """The drift correction's curve, and the grey-ramp model's black.
 
 The drift curve: ±σ jitter of the references about a trend is averaged out, and a step stays a
-step (a smoother alone blurs it across the references beside it). The grey-ramp model: a black read a
+step (a smoother alone blurs it across the references beside it). Its reference state is read from
+every reference of the settled end, not from the last two alone, and only from those that are
+settled. The grey-ramp model: a black read a
 little below zero (noise about none) is taken as zero, and the greys are read against that same
 black, so the model still reproduces the greys it was built from.
 """
@@ -16,7 +18,7 @@ import pytest
 from tests.diagnostics.independent_generator import PAIRED_FORMS, generate_session, hidden_colours
 from workbench.colorimetry import delta_E2000
 from workbench.diagnostics.authors import fit_grey_ramp_linearisation, grey_ramp_model
-from workbench.diagnostics.evidence import DriftCorrection, partial_greys
+from workbench.diagnostics.evidence import DriftCorrection, partial_greys, settled_reference
 
 
 def test_jitter_about_a_decline_is_averaged_out():
@@ -27,7 +29,9 @@ def test_jitter_about_a_decline_is_averaged_out():
     for seed in range(20):
         gains = truth * (1.0 + sd * np.random.default_rng(seed).standard_normal(times.size))
         curve = DriftCorrection(times, gains, gains).smoothed_to_noise(np.full(times.size, sd))
-        rms.append(np.sqrt(np.mean((curve.gain(times) - truth) ** 2)))
+        # the curve's shape (the reference state it is scaled to is tested below)
+        scale = gains[0] / curve.gains[0]
+        rms.append(np.sqrt(np.mean((curve.gain(times) * scale - truth) ** 2)))
     # a straight line through 12 references is known to about 0.4 σ; one reference to 1 σ
     assert np.mean(rms) < 0.6 * sd
 
@@ -40,9 +44,44 @@ def test_a_step_stays_a_step():
     for seed in range(20):
         gains = truth * (1.0 + sd * np.random.default_rng(100 + seed).standard_normal(times.size))
         curve = DriftCorrection(times, gains, gains).smoothed_to_noise(np.full(times.size, sd))
-        worst.append(np.max(np.abs(curve.gain(times) - truth)))
+        scale = gains[0] / curve.gains[0]
+        worst.append(np.max(np.abs(curve.gain(times) * scale - truth)))
     # the references beside the step are not blurred toward each other (that is 5 σ)
     assert np.median(worst) < 1.5 * sd and np.max(worst) < 3 * sd
+
+
+def test_the_reference_state_is_read_from_every_settled_reference():
+    # a warm-up that settles halfway: the settled half's mean is known to 1/√6 of one reference
+    times = np.arange(12.0) * 200.0
+    truth = 1.0 - 0.05 * np.exp(-times / 150.0)
+    sd = 0.003
+    settled, last_two = [], []
+    for seed in range(40):
+        gains = truth * (1.0 + sd * np.random.default_rng(200 + seed).standard_normal(times.size))
+        settled.append(settled_reference(times, gains, np.full(times.size, sd)) - truth[-1])
+        last_two.append(gains[-2:].mean() - truth[-1])
+    assert np.sqrt(np.mean(np.square(settled))) < 0.7 * np.sqrt(np.mean(np.square(last_two)))
+    # and the correction describes the display in that state: the last reference reads about 1
+    gains = truth * (1.0 + sd * np.random.default_rng(7).standard_normal(times.size))
+    curve = DriftCorrection(times, gains, gains).smoothed_to_noise(np.full(times.size, sd))
+    assert abs(curve.gains[-1] * settled_reference(times, gains, np.full(times.size, sd))
+               / gains[-1] - 1.0) < 1e-12
+
+
+def test_a_display_still_changing_at_the_end_keeps_the_last_two():
+    # a decline to the last reference, 10 σ a reference apart: no run of three is steady
+    times = np.arange(10.0)
+    sd = 0.001
+    gains = 1.0 - 0.01 * times
+    assert settled_reference(times, gains, np.full(times.size, sd)) == pytest.approx(
+        gains[-2:].mean())
+    # after a step of 20 σ, only the references after it are the settled state
+    references = np.array([
+        settled_reference(times, np.where(times < 4, 1.02, 1.0)
+                          + sd * np.random.default_rng(300 + seed).standard_normal(10),
+                          np.full(times.size, sd)) for seed in range(40)])
+    assert np.max(np.abs(references - 1.0)) < 3 * sd
+    assert np.sqrt(np.mean((references - 1.0) ** 2)) < 0.8 * sd
 
 
 def test_the_grey_ramp_model_reads_the_greys_against_the_black_it_adds_back():
