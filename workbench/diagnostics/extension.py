@@ -13,8 +13,10 @@ for a measurement at time ``t`` are multiplied by it.
 
 Grey rows (``r = g = b``), where a session has them, add per-channel output
 points: each grey's black-subtracted XYZ is solved for the three channel
-outputs through the full-drive primaries (divided by the interaction gain when
-that term is on).
+outputs through the primaries as they are at the grey's drive (the full-drive
+primaries, each moved to its chromaticity at that drive where the
+chromaticity-shift term is on; divided by the interaction gain when that term
+is on).
 """
 
 from __future__ import annotations
@@ -23,7 +25,12 @@ import numpy as np
 
 from workbench.diagnostics.detectors import DiagnosisContext, common_gain_test, tone_data
 from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift, partial_greys, xy_of
-from workbench.display.extended import ChannelInteraction, ChromaticityDrift, ExtendedDisplay
+from workbench.display.extended import (
+    ChannelInteraction,
+    ChromaticityDrift,
+    ExtendedDisplay,
+    xy_to_unit_XYZ,
+)
 from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_tone_curve
 
 __all__ = ["TERMS", "TONE_CHANGING_EFFECTS", "PARAMETRIC_TONE_FORMS",
@@ -70,14 +77,33 @@ def fitted_on(effect: str, session, context: DiagnosisContext | None = None) -> 
     }[effect]
 
 
-def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteraction | None = None):
-    """Per-channel (drive, output) points implied by the grey rows, or None."""
+def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteraction | None = None,
+                         chromaticity=(None, None, None)):
+    """Per-channel (drive, output) points implied by the grey rows, or None.
+
+    Each grey is solved through the primaries as they are at its drive: the full-drive primaries,
+    or, for a channel with a ``chromaticity`` term (:class:`ChromaticityDrift`), that channel's
+    primary moved to its chromaticity at that drive. Solved through the full-drive primaries
+    alone, a red that desaturates toward white at low drive reads as light of the green and blue
+    channels: on an adaptive session of a bluish black with a desaturation toward white (ten
+    sweep levels a channel and 18 greys), the greys' tone curves put the hidden colours at
+    0.039 mean ΔE00, against 0.017 with the greys left out and 0.016 for the paper plan.
+    """
     greys = partial_greys(context.fit.rgb) & ~context.copies
     if greys.sum() < 3:
         return None
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
     target = context.fit.XYZ[greys] - context.black
-    direct = np.linalg.solve(matrix, target.T).T
+    drive = context.fit.rgb[greys, 0] / 255.0
+    if any(term is not None for term in chromaticity):
+        full_xy = xy_of(matrix.T)
+        matrices = np.empty((drive.size, 3, 3))
+        for c, term in enumerate(chromaticity):
+            xy = full_xy[c] + (0.0 if term is None else term.delta(drive))
+            matrices[:, :, c] = xy_to_unit_XYZ(np.broadcast_to(xy, (drive.size, 2))) * matrix[1, c]
+        direct = np.linalg.solve(matrices, target[:, :, None])[:, :, 0]
+    else:
+        direct = np.linalg.solve(matrix, target.T).T
     outputs = direct
     if interaction is not None:
         for _ in range(20):
@@ -86,7 +112,6 @@ def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteract
         # no interaction term: solve through primaries scaled to add up to the measured white,
         # so a non-additivity too small to model is not read as a tone-curve shape
         outputs = direct / np.linalg.solve(matrix, context.white - context.black)
-    drive = context.fit.rgb[greys, 0] / 255.0
     return drive, outputs
 
 
@@ -224,7 +249,9 @@ def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=N
     effects = set(effects)
     interaction = (_interaction_term(context, interaction_exponent)
                    if "channel-interaction" in effects else None)
-    greys = grey_channel_outputs(context, interaction)
+    chromaticity = tuple(_chromaticity_term(s) if "chromaticity-shift" in effects else None
+                         for s in context.sweeps)
+    greys = grey_channel_outputs(context, interaction, chromaticity)
     tone = []
     for sweep in context.sweeps:
         extra = None if greys is None else (greys[0], greys[1][:, sweep.channel])
@@ -242,8 +269,6 @@ def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=N
         else:
             curve = fit_tone_curve(drive, output, "power")
         tone.append(curve)
-    chromaticity = tuple(_chromaticity_term(s) if "chromaticity-shift" in effects else None
-                         for s in context.sweeps)
     full = np.array([s.full_XYZ for s in context.sweeps])
     return ExtendedDisplay(
         black=context.black if "black-offset" in effects else np.zeros(3),
