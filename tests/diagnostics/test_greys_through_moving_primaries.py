@@ -69,3 +69,19 @@ def test_without_a_chromaticity_term_the_greys_are_solved_as_before(sessions):
     # the primaries move most at low drive: the darkest greys are read most differently
     shift = (np.abs(moved[1] - plain[1]) / np.abs(plain[1])).max(axis=1)
     assert shift[np.argmin(moved[0])] > shift[top]
+
+
+def test_a_chromaticity_term_extrapolated_out_of_reach_leaves_the_primary_where_it_is(sessions):
+    """A term fitted on the bright sweep points can put a dark grey's primary at y ≤ 0: that grey
+    is solved through the full-drive primary instead of through no chromaticity at all."""
+    from workbench.display.extended import ChromaticityDrift
+
+    _, _, diagnosis = sessions[0]
+    context = diagnosis.context
+    wild = ChromaticityDrift(((0.0, -5.0), (0.0, 0.0)))  # y falls by 5 × (1 − d): below 0 soon
+    drive, outputs = extension.grey_channel_outputs(context, None, (None, wild, None))
+    assert np.all(np.isfinite(outputs))
+    plain = extension.grey_channel_outputs(context)[1]
+    lost = (context.sweeps[1].full_xy[1] - 5.0 * (1.0 - drive)) <= 1e-3
+    assert lost.any()
+    np.testing.assert_allclose(outputs[lost], plain[lost])

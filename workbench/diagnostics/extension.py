@@ -99,9 +99,17 @@ def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteract
         full_xy = xy_of(matrix.T)
         matrices = np.empty((drive.size, 3, 3))
         for c, term in enumerate(chromaticity):
-            xy = full_xy[c] + (0.0 if term is None else term.delta(drive))
-            matrices[:, :, c] = xy_to_unit_XYZ(np.broadcast_to(xy, (drive.size, 2))) * matrix[1, c]
-        direct = np.linalg.solve(matrices, target[:, :, None])[:, :, 0]
+            xy = np.broadcast_to(full_xy[c] + (0.0 if term is None else term.delta(drive)),
+                                 (drive.size, 2))
+            # a term extrapolated out of the gamut's reach (the darkest greys lie below the
+            # sweep points it was fitted on) is no chromaticity: the primary stays as at full drive
+            usable = np.all(np.isfinite(xy), axis=1) & (xy[:, 1] > 1e-3) & (xy.sum(axis=1) < 1.0)
+            xy = np.where(usable[:, None], xy, full_xy[c])
+            matrices[:, :, c] = xy_to_unit_XYZ(xy) * matrix[1, c]
+        try:
+            direct = np.linalg.solve(matrices, target[:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:  # primaries moved onto one another: as at full drive
+            direct = np.linalg.solve(matrix, target.T).T
     else:
         direct = np.linalg.solve(matrix, target.T).T
     outputs = direct
