@@ -95,6 +95,7 @@ def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteract
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
     target = context.fit.XYZ[greys] - context.black
     drive = context.fit.rgb[greys, 0] / 255.0
+    direct = None
     if any(term is not None for term in chromaticity):
         full_xy = xy_of(matrix.T)
         matrices = np.empty((drive.size, 3, 3))
@@ -109,8 +110,8 @@ def grey_channel_outputs(context: DiagnosisContext, interaction: ChannelInteract
         try:
             direct = np.linalg.solve(matrices, target[:, :, None])[:, :, 0]
         except np.linalg.LinAlgError:  # primaries moved onto one another: as at full drive
-            direct = np.linalg.solve(matrix, target.T).T
-    else:
+            pass
+    if direct is None:
         direct = np.linalg.solve(matrix, target.T).T
     outputs = direct
     if interaction is not None:

@@ -118,7 +118,6 @@ def noise_weights(output) -> np.ndarray:
     return 1.0 / (0.002 * np.abs(np.asarray(output, dtype=float)) + 1e-4)
 
 
-
 @dataclass(frozen=True)
 class PowerCurve(ToneCurve):
     gamma: float
