@@ -182,6 +182,19 @@ def _mixtures_only(errors):
     return (values[keep], groups[keep]) if keep.sum() >= MIN_MIXTURES else None
 
 
+GREY_GROUP = 1
+"""The partial-drive greys' group."""
+
+
+def _greys_only(errors):
+    """Cross-validated (errors, groups) of the grey rows alone (None: none, or no errors)."""
+    if errors is None:
+        return None
+    values, groups = errors
+    keep = groups == GREY_GROUP
+    return (values[keep], groups[keep]) if keep.sum() >= 3 else None
+
+
 def has_sparse_sweep(context: DiagnosisContext) -> bool:
     """Whether every channel's sweep holds :data:`SPARSE_SWEEP_LEVELS` levels below full drive."""
     fewest, most = SPARSE_SWEEP_LEVELS
@@ -295,7 +308,15 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     the model it would replace (``_without_whites``: it predicts a held-out white
     from the other whites, the top level of its ramp). Where the fit rows hold
     :data:`MIN_MIXTURES` mixtures or more, ``grey-ramp+sweeps`` must also predict
-    them no worse (``_mixtures_only``).
+    them no worse (``_mixtures_only``). Where they hold fewer, a grey-ramp candidate
+    that predicts the fit rows as well as the extension within noise replaces it where
+    it predicts the greys better (``_greys_only``): the greys are then the only rows
+    that light several channels, as a validation colour does, while the extension's
+    gain is on the single-channel sweeps its tone curves are fitted to. Its smoothed
+    tone curves (:func:`~workbench.display.tone_curves.smoothed_points`) predicted
+    the sweeps of a real LCD chart with no mixtures among its fit rows (87 greys) far
+    better than the grey ramp did, won the choice by 0.001, and scored 0.38 ΔE00 on
+    its 434 held-out mixtures where the sweep correction scored 0.31.
     """
     def score(errors):
         return float("inf") if errors is None else group_mean(*errors)
@@ -352,6 +373,19 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                          f"{mixtures[0][0].size} mixtures worse by "
                          f"{-paired_gain(*mixtures)[0]:.3f}")
             continue
+        greys = paired_gain(_greys_only(chosen_errors), _greys_only(errors))
+        if (not gain > needed and chosen == "extension" and name in GREY_RAMP_CANDIDATES
+                and np.isfinite(scores[name]) and mixtures[0] is None
+                and gain > -CV_Z * standard_error and greys[0] > 0
+                and not others[0] < -CV_Z * others[1]):
+            # no mixtures among the fit rows: within noise overall, the greys (the rows that
+            # light several channels, as a validation colour does) decide against the extension
+            notes.append(f"{name} predicts the fit rows as well as the extension within noise "
+                         f"({gain:.3f} ± {standard_error:.3f}) and the greys better "
+                         f"({greys[0]:.3f} ± {greys[1]:.3f}); the fit rows hold no mixtures, "
+                         "and the greys are the rows most like them")
+            chosen, chosen_errors = name, errors
+            continue
         if gain > needed and np.isfinite(scores[name]):
             notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
                          if gain > 0 else
@@ -373,6 +407,10 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         reason = (f"the {current} predicts unseen fit rows as well as any candidate allows "
                   f"(cross-validated mean ΔE00: {listed}" + (f"; {'; '.join(notes)}" if notes
                                                              else "") + ")")
+    elif scores[chosen] > scores.get(current, float("inf")) and chosen not in IDENTIFIED_CANDIDATES:
+        reason = (f"{chosen} predicts unseen fit rows as well as the {current} within noise, and "
+                  f"the greys better ({scores[chosen]:.3f} against {scores[current]:.3f} "
+                  f"cross-validated mean ΔE00; {'; '.join(notes)})")
     elif scores[chosen] > scores.get(current, float("inf")):
         others = [note for note in notes if not note.startswith(f"{chosen},")]
         reason = (f"{chosen}, the model of the identified cause, predicts unseen fit rows no "
