@@ -310,7 +310,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     :data:`MIN_MIXTURES` mixtures or more, ``grey-ramp+sweeps`` must also predict
     them no worse (``_mixtures_only``). Where they hold fewer, a grey-ramp candidate
     that predicts the fit rows as well as the extension within noise replaces it where
-    it predicts the greys better (``_greys_only``): the greys are then the only rows
+    it predicts the greys better beyond noise (``_greys_only``): the greys are then the only rows
     that light several channels, as a validation colour does, while the extension's
     gain is on the single-channel sweeps its tone curves are fitted to. Its smoothed
     tone curves (:func:`~workbench.display.tone_curves.smoothed_points`) predicted
@@ -376,10 +376,11 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         greys = paired_gain(_greys_only(chosen_errors), _greys_only(errors))
         if (not gain > needed and chosen == "extension" and name in GREY_RAMP_CANDIDATES
                 and np.isfinite(scores[name]) and mixtures[0] is None
-                and gain > -CV_Z * standard_error and greys[0] > 0
+                and gain > -CV_Z * standard_error and greys[0] > CV_Z * greys[1]
                 and not others[0] < -CV_Z * others[1]):
             # no mixtures among the fit rows: within noise overall, the greys (the rows that
-            # light several channels, as a validation colour does) decide against the extension
+            # light several channels, as a validation colour does), beyond noise, decide
+            # against the extension
             notes.append(f"{name} predicts the fit rows as well as the extension within noise "
                          f"({gain:.3f} ± {standard_error:.3f}) and the greys better "
                          f"({greys[0]:.3f} ± {greys[1]:.3f}); the fit rows hold no mixtures, "
