@@ -390,14 +390,18 @@ def smoothed_points(drive, output, interpolation: str = "pchip") -> SmoothedPoin
     candidates: the points themselves, joined by ``interpolation`` (``"pchip"`` or
     ``"linear"``); and the points' departure from the best power law, smoothed by a
     second-difference penalty pinned at both ends (:func:`~workbench.display.smoothing.whittaker_pinned`,
-    its strength chosen by leave-one-out). The one that predicts a left-out level better is
-    kept (weighted by :func:`noise_weights`), then made non-decreasing (isotonic regression).
+    its strength chosen by leave-one-out). The smoothed levels are kept where they predict a
+    left-out level better than the points themselves by more than :data:`SMOOTHING_Z` paired
+    standard errors (squared errors weighted by :func:`noise_weights`), then made
+    non-decreasing (isotonic regression).
 
     Interpolating copies every reading's noise into the curve. On noisy sweeps and grey ramps
     of the independent generator the smoothed curves predicted hidden colours better (the peer
     bench: a clean display on the seed authors' plan 0.063 → 0.018 ΔE00); where the levels are
     sparse and the curve bends sharply between them (a drive crosstalk clips the greys near full
-    drive) leave-one-out keeps the interpolation.
+    drive) leave-one-out keeps the interpolation. Without the paired rule a nearly noiseless
+    real grey ramp (a Dell S2317HWi) was smoothed on a gain within noise and lost 0.349 →
+    0.363 ΔE00 on its held-out colours.
     """
     drive, output = _check(drive, output)
     order = np.argsort(drive, kind="stable")
