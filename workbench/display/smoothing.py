@@ -33,13 +33,14 @@ STRENGTHS = 10.0 ** np.arange(-6.0, 10.01, 0.5)
 @dataclass(frozen=True)
 class PinnedSmooth:
     """The chosen fit: ``values`` at the interior points, its weighted leave-one-out sum of
-    squares, the strength and the effective degrees of freedom (trace of the hat matrix)."""
+    squares, the strength, the effective degrees of freedom (trace of the hat matrix) and
+    each point's leave-one-out error."""
 
     values: np.ndarray
     loo_rss: float
     strength: float
     edf: float
-    loo_errors: np.ndarray | None = None
+    loo_errors: np.ndarray
 
 
 def _second_differences(x: np.ndarray) -> np.ndarray:

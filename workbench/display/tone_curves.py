@@ -362,9 +362,7 @@ def _interpolation_loo(d, L, interpolation: str) -> np.ndarray:
                      + (-2 * u ** 3 + 3 * u ** 2) * L[inner + 1]
                      + (u ** 3 - u ** 2) * span[k] * slope_c)
         errors[k] = L[inner] - predicted
-    for j in {1, d.size - 2} & set(i.tolist()):
-        if 2 <= j <= d.size - 3:
-            continue
+    for j in {1, d.size - 2}:  # the levels beside the ends (one, where there is one level)
         errors[j - 1] = L[j] - PchipInterpolator(np.delete(d, j), np.delete(L, j))(d[j])
     return errors
 
