@@ -121,21 +121,24 @@ def test_an_offered_power_limit_must_lower_the_error(given_errors, power_limit_e
     assert (choice.chosen == "power-limit") is taken, choice.reason
 
 
-@pytest.mark.parametrize("others_gain, taken", [(0.0, False), (0.10, True)])
+@pytest.mark.parametrize("others_gain, mixtures, taken",
+                         [(0.0, 40, False), (0.10, 40, True), (0.10, 0, False)])
 def test_a_grey_ramp_replaces_an_identified_cause_only_beyond_noise_off_the_whites(
-        given_errors, others_gain, taken):
+        given_errors, others_gain, mixtures, taken):
     """A power limit identified as the cause is kept against a grey-ramp candidate whose gain
     is at the white references (a level of its own ramp) and within noise elsewhere (the seed
-    authors' plan holds no mixtures to tell them apart: the sweep correction scored 0.43 ΔE00 on
-    hidden colours where the power limit scored 0.09); a gain beyond noise on the sweeps and
-    greys too replaces it."""
+    authors' plan: the sweep correction scored 0.43 ΔE00 on hidden colours where the power limit
+    scored 0.09); a gain beyond noise on the sweeps and greys too replaces it where the fit rows
+    hold mixtures, and never where they hold none: then the gain is on the table's own points
+    (grey ramps joined along the power law's bend predicted them 0.07 ± 0.02 better than a
+    quadratic power limit's model, and scored 0.43 on hidden colours against its 0.14)."""
     rng = np.random.default_rng(8)
-    counts = (60, 40, 8, 0)
-    extension = _errors(rng, 0.60, 0.60, 0.60, 0.0, counts)
-    given_errors["power-limit"] = _errors(rng, 0.20, 0.30, 0.40, 0.0, counts)
-    given_errors["grey-ramp"] = _errors(rng, 0.60, 0.60, 0.60, 0.0, counts)
+    counts = (60, 40, 8, mixtures)
+    extension = _errors(rng, 0.60, 0.60, 0.60, 0.60, counts)
+    given_errors["power-limit"] = _errors(rng, 0.20, 0.30, 0.40, 0.30, counts)
+    given_errors["grey-ramp"] = _errors(rng, 0.60, 0.60, 0.60, 0.60, counts)
     given_errors["grey-ramp+sweeps"] = _errors(rng, 0.20 - others_gain, 0.30 - others_gain,
-                                               0.10, 0.0, counts)
+                                               0.10, 0.30 - others_gain, counts)
     choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
                                        power_limit=True, found=("channel-interaction",),
                                        extension_terms=("channel-interaction",))
@@ -216,3 +219,23 @@ def test_without_mixtures_the_greys_decide_a_tie_with_the_extension(given_errors
     else:
         assert choice.chosen == "grey-ramp+sweeps"
         assert "the greys better" in choice.reason
+
+
+@pytest.mark.parametrize("z, taken", [(0.5, False), (1.5, True)])
+def test_the_greys_break_a_tie_by_one_standard_error(given_errors, z, taken):
+    # no mixtures; overall within noise; the greys favour the grey ramp by z standard errors
+    rng = np.random.default_rng(12)
+    counts = (30, 40, 4, 0)
+    extension = _errors(rng, 0.30, 0.50, 0.30, 0.0, counts)
+    given_errors["grey-ramp"] = _errors(rng, 0.45, 0.60, 0.30, 0.0, counts)
+    candidate = (extension[0].copy(), extension[1])
+    spread = 0.05 * rng.standard_normal(40)
+    spread -= spread.mean()
+    greys = candidate[1] == model_choice.GREY_GROUP
+    candidate[0][greys] = extension[0][greys] + spread
+    standard_error = model_choice.paired_gain(model_choice._greys_only(extension),
+                                              model_choice._greys_only(candidate))[1]
+    candidate[0][greys] -= z * standard_error
+    given_errors["grey-ramp+sweeps"] = candidate
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False)
+    assert (choice.chosen == "grey-ramp+sweeps") is taken, choice.reason

@@ -186,6 +186,19 @@ GREY_GROUP = 1
 """The partial-drive greys' group."""
 
 
+GREYS_TIE_Z = 1.0
+"""Standard errors of the paired difference by which the greys must favour a grey-ramp
+candidate for them to break its tie with the extension (fewer than :data:`MIN_MIXTURES`
+mixtures among the fit rows; :func:`choose_model`). A tie-break, so less than
+:data:`~workbench.diagnostics.cross_validation.CV_Z`: at 2 a real KOIOS K2721UG chart (87 greys,
+no mixtures) kept the extension on the greys' 0.085 ± 0.043 and scored 0.381 ΔE00 on its 434
+held-out mixtures, where the sweep correction scored 0.305 (the seed authors' method 0.306); at
+1, on the peer bench's 360 grey-ramp sessions of three seed sets, one bluish black beside a
+desaturation went 0.049 → 0.071 (the authors' method 0.109) and no other changed. With no
+threshold at all, three generated sessions were changed for the worse on greys gains of
+0.003–0.017."""
+
+
 def _greys_only(errors):
     """Cross-validated (errors, groups) of the grey rows alone (None: none, or no errors)."""
     if errors is None:
@@ -303,6 +316,13 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     fit rows) the sweep correction took a quadratic power limit and a knee on the
     whites alone (0.24 and 0.19 better there, worse on the sweeps) and scored 0.43
     and 0.45 ΔE00 on hidden colours where the power limit scored 0.09 and 0.13.
+    Where the fit rows hold fewer than :data:`MIN_MIXTURES` mixtures, no grey-ramp
+    candidate replaces the model of an identified cause at all: its gain is then on the
+    greys and sweeps its own tables pass through, and no row tells how either
+    interaction reaches a colour off the grey axis (with the grey ramps joined along the
+    power law's bend, the sweep correction beat two quadratic power limits on the seed
+    authors' plan by 0.07 ± 0.02 on the greys and scored 0.43 and 0.24 ΔE00 on hidden
+    colours where the power limit scored 0.14 and 0.04).
     And a grey-ramp candidate must also
     predict the rows other than the white references no worse beyond noise than
     the model it would replace (``_without_whites``: it predicts a held-out white
@@ -310,8 +330,9 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     :data:`MIN_MIXTURES` mixtures or more, ``grey-ramp+sweeps`` must also predict
     them no worse (``_mixtures_only``). Where they hold fewer, a grey-ramp candidate
     that predicts the fit rows as well as the extension within noise replaces it where
-    it predicts the greys better beyond noise (``_greys_only``): the greys are then the only rows
-    that light several channels, as a validation colour does, while the extension's
+    it predicts the greys better by :data:`GREYS_TIE_Z` standard errors (``_greys_only``):
+    the greys are then the only rows that light several channels, as a validation colour
+    does, while the extension's
     gain is on the single-channel sweeps its tone curves are fitted to. Its smoothed
     tone curves (:func:`~workbench.display.tone_curves.smoothed_points`) predicted
     the sweeps of a real LCD chart with no mixtures among its fit rows (87 greys) far
@@ -351,7 +372,17 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         needed = (CV_Z * standard_error if noise_tested else
                   -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES and power_limit else 0.0)
         others = paired_gain(_without_whites(chosen_errors), _without_whites(errors))
+        mixtures = (_mixtures_only(chosen_errors), _mixtures_only(errors))
+        greys = paired_gain(_greys_only(chosen_errors), _greys_only(errors))
         if gain > needed and np.isfinite(scores[name]) and name in GREY_RAMP_CANDIDATES:
+            # without mixtures among the fit rows, the rows that could tell a flexible
+            # interaction from the identified cause's are the candidate's own table points
+            if chosen in IDENTIFIED_CANDIDATES and mixtures[0] is None:
+                notes.append(f"{name} does not replace the {chosen}, the identified cause: its "
+                             f"gain ({gain:.3f} ± {standard_error:.3f}) is on the greys and "
+                             "sweeps its tables pass through, and the fit rows hold no mixtures "
+                             "to tell how either interaction reaches a colour off the grey axis")
+                continue
             # its gain may be at the whites, a level of its own ramp: the other rows decide
             if chosen in IDENTIFIED_CANDIDATES and not others[0] > CV_Z * others[1]:
                 notes.append(f"{name} does not beat the {chosen}, the identified cause: its gain "
@@ -365,7 +396,6 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                              f"the other rows worse beyond noise ({others[0]:.3f} ± "
                              f"{others[1]:.3f})")
                 continue
-        mixtures = (_mixtures_only(chosen_errors), _mixtures_only(errors))
         if (gain > needed and np.isfinite(scores[name]) and name in NOISE_TESTED_CANDIDATES
                 and None not in mixtures and paired_gain(*mixtures)[0] < 0):
             notes.append(f"{name} does not beat the {chosen}: its gain ({gain:.3f}) is on the "
@@ -373,10 +403,9 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                          f"{mixtures[0][0].size} mixtures worse by "
                          f"{-paired_gain(*mixtures)[0]:.3f}")
             continue
-        greys = paired_gain(_greys_only(chosen_errors), _greys_only(errors))
         if (not gain > needed and chosen == "extension" and name in GREY_RAMP_CANDIDATES
                 and np.isfinite(scores[name]) and mixtures[0] is None
-                and gain > -CV_Z * standard_error and greys[0] > CV_Z * greys[1]
+                and gain > -CV_Z * standard_error and greys[0] > GREYS_TIE_Z * greys[1]
                 and not others[0] < -CV_Z * others[1]):
             # no mixtures among the fit rows: within noise overall, the greys (the rows that
             # light several channels, as a validation colour does), beyond noise, decide
