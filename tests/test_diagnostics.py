@@ -310,3 +310,27 @@ def test_sparse_chart_cross_validates_and_keeps_up_with_the_authors_method(name)
     assert not any("inf" in f["cross_validation"] for f in document["findings"])
     authors = score_authors_method(chart)
     assert diagnosis.extended_score.mean_dE00 <= authors.mean_dE00 + 0.02
+
+
+def test_the_residual_lut_inverts_where_the_base_is_flat_near_a_channels_zero():
+    """A base whose blue rises as d^2.6 (flat near zero) under a residual that moves in
+    proportion to the drive there: the fixed point alone overshoots (it stopped 4 counts of blue
+    from a colour with none on a real LCD's grey-ramp model); the inverse must find the colour."""
+    from workbench.colorimetry import delta_E2000
+    from workbench.display import GammaMatrixDisplay
+    from workbench.display.residual_lut import ResidualLUTDisplay
+
+    matrix = np.array([[41.2, 35.8, 18.0], [21.3, 71.5, 7.2], [1.9, 11.9, 95.0]])
+    base = GammaMatrixDisplay(gamma=np.array([2.2, 2.2, 2.6]), matrix=matrix,
+                              white=matrix.sum(axis=1), black=np.array([0.05, 0.05, 0.08]))
+    nodes = np.linspace(0.0, 1.0, 9)
+    r, g, b = np.meshgrid(nodes, nodes, nodes, indexing="ij")
+    # a residual that grows linearly with blue from zero (and a little with the others)
+    residual = np.stack([0.4 * b + 0.1 * r * g, 0.3 * b, 1.2 * b + 0.05 * g], axis=-1)
+    model = ResidualLUTDisplay(base=base, lut=residual)
+    rng = np.random.default_rng(2)
+    dac = np.column_stack([rng.uniform(10, 120, 400), rng.uniform(10, 120, 400),
+                           rng.choice([0.0, 1.0, 2.0, 3.0], 400)])
+    XYZ = model.forward(dac)
+    back = model.inverse(XYZ)
+    assert delta_E2000(model.forward(back), XYZ, base.white_XYZ).max() < 0.01
