@@ -94,24 +94,6 @@ def test_a_sharp_clip_between_sparse_levels_is_not_smoothed_away():
     assert points.loo_rss >= 0.0
 
 
-def test_straight_lines_between_sparse_greys_follow_the_curves_bend():
-    """15 greys of a GOG curve (gain 1.03, offset −0.03, γ 2.4: not the power law the join
-    follows) read with 0.1 % Student-t noise: between the levels, the linear curve must be
-    within half the error of straight lines through the levels (measured: 0.09 of it)."""
-    d = np.linspace(16, 240, 15) / 255.0
-    truth = lambda v: np.maximum(0.0, 1.03 * v - 0.03) ** 2.4  # noqa: E731
-    between = (d[:-1] + d[1:]) / 2
-    rng = np.random.default_rng(8)
-    ratios = []
-    for _ in range(5):
-        measured = truth(d) * (1.0 + 0.001 * rng.standard_t(4, d.size))
-        straight = np.interp(between, np.r_[0.0, d, 1.0], np.r_[0.0, measured, 1.0])
-        curve = LinearCurve.fit(d, measured)
-        error = lambda v: float(np.sqrt(np.mean(((v - truth(between)) / truth(between)) ** 2)))  # noqa: E731
-        ratios.append(error(curve.forward(between)) / error(straight))
-    assert np.mean(ratios) < 0.5, ratios
-
-
 def test_the_spline_form_is_scored_by_its_leave_one_out_error():
     rng = np.random.default_rng(2)
     d = np.arange(5, 255, 5) / 255.0
@@ -157,6 +139,5 @@ def test_nearly_noiseless_levels_keep_their_fine_structure():
     rng = np.random.default_rng(4)
     truth = d ** 2.2 * (1.0 + 0.004 * np.sin(2 * np.pi * d * 255 / 14.0))
     measured = truth * (1.0 + 0.0002 * rng.standard_normal(d.size))
-    points = smoothed_points(d, measured, "linear")
-    output = np.interp(d, points.drive, points.output)
+    output = np.asarray(smoothed_points(d, measured, "linear").output)[1:-1]
     assert np.max(np.abs(output / measured - 1.0)) < 0.001

@@ -20,10 +20,6 @@ Forms
                     nearly coincident levels, which real charts hold).
 ==================  ========================================
 
-A ``linear`` curve fitted to sparse levels may join them along the bend of the best power law
-rather than by chords: the fit then stores the curve on a grid of :data:`GUIDED_GRID` drives
-(:func:`smoothed_points`), which straight lines join as closely as the bend allows.
-
 The two table forms are fitted through the measured levels, or through the
 levels smoothed where that predicts a left-out level better beyond noise
 (:func:`smoothed_points`); the profile stores the points either way.
@@ -371,10 +367,6 @@ def _interpolation_loo(d, L, interpolation: str) -> np.ndarray:
     return errors
 
 
-GUIDED_GRID = 256
-"""Drives, evenly spaced from 0 to 1, on which a ``linear`` curve joined along the power law's
-bend is given (beside the measured levels): one per 8-bit code."""
-
 SMOOTHING_Z = 2.0
 """Paired standard errors by which smoothing must lower the leave-one-out error of the points
 themselves (the model choice's rule for a more flexible candidate, ``CV_Z``)."""
@@ -408,16 +400,6 @@ def smoothed_points(drive, output, interpolation: str = "pchip") -> SmoothedPoin
     drive) leave-one-out keeps the interpolation. Without the paired rule a nearly noiseless
     real grey ramp (a Dell S2317HWi) was smoothed on a gain within noise and lost 0.349 →
     0.363 ΔE00 on its held-out colours.
-
-    ``"linear"``: straight lines between the levels are chords of a curve that bends, too
-    bright between them: with γ 2.2 and greys 16 DAC apart, 15 % at a tenth of full drive and
-    3 % at a fifth (33 % and 8 % where a fold of the cross-validation leaves a level out, which
-    scores a grey ramp by its chords). Where the best power law's
-    departure, joined by straight lines, predicts a left-out level better than the levels
-    joined so (the same weighted leave-one-out), the curve is the power law plus that joined
-    departure (smoothed or not, as above), given on a grid of :data:`GUIDED_GRID` drives and
-    the levels. On `paper+greys` sessions of the independent generator (15 greys) it lowered
-    the hidden error of the exported model where a grey ramp won its choice.
     """
     drive, output = _check(drive, output)
     order = np.argsort(drive, kind="stable")
@@ -434,32 +416,18 @@ def smoothed_points(drive, output, interpolation: str = "pchip") -> SmoothedPoin
     weight = noise_weights(raw[1:-1]) ** 2 * counts[inner]
     if d.size < 3:
         return SmoothedPoints(tuple(d), tuple(interpolated), 0.0, n, None)
-    try:
-        power = PowerCurve.fit(d[1:-1], raw[1:-1]) if np.any(raw[1:-1] > 0) else None
-    except (InputError, ValueError, FloatingPointError):
-        power = None
-    reference = d if power is None else power.forward(d)
     interpolation_errors = _interpolation_loo(d, raw, interpolation)
     best = (float(np.sum(weight * interpolation_errors ** 2)), None, interpolated)
+    try:
+        reference = PowerCurve.fit(d[1:-1], raw[1:-1]).forward(d) if np.any(raw[1:-1] > 0) else d
+    except (InputError, ValueError, FloatingPointError):
+        reference = d
     smooth = whittaker_pinned(d, (raw - reference)[1:-1], weight)
     if smooth is not None and _beyond_noise(weight * (interpolation_errors ** 2
                                                       - smooth.loo_errors ** 2)):
         values = np.clip(isotonic(reference[1:-1] + smooth.values), 0.0, 1.0)
         best = (smooth.loo_rss, smooth.strength,
                 np.maximum.accumulate(np.concatenate([[0.0], values, [1.0]])))
-    if interpolation == "linear" and power is not None:
-        # straight lines may join the departure from the power law rather than the levels
-        guided = float(np.sum(weight * _interpolation_loo(d, raw - reference, "linear") ** 2))
-        if guided < float(np.sum(weight * interpolation_errors ** 2)):
-            extra = np.linspace(0.0, 1.0, GUIDED_GRID)
-            grid = np.union1d(d, extra[np.min(np.abs(extra[:, None] - d), axis=1) > 1e-9])
-            values = power.forward(grid) + np.interp(grid, d, np.asarray(best[2]) - reference)
-            values = np.maximum.accumulate(np.clip(values, 0.0, 1.0))
-            values[0], values[-1] = 0.0, 1.0
-            return SmoothedPoints(tuple(float(v) for v in grid),
-                                  tuple(float(v) for v in values),
-                                  best[0] if best[1] is not None else guided, n,
-                                  best[1])
     return SmoothedPoints(tuple(float(v) for v in d), tuple(float(v) for v in best[2]),
                           best[0], n, best[1])
 
