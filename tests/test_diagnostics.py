@@ -314,8 +314,8 @@ def test_sparse_chart_cross_validates_and_keeps_up_with_the_authors_method(name)
 
 def test_the_residual_lut_inverts_where_the_base_is_flat_near_a_channels_zero():
     """A base whose blue rises as d^2.6 (flat near zero) under a residual that moves in
-    proportion to the drive there: the fixed point alone overshoots (it stopped 4 counts of blue
-    from a colour with none on a real LCD's grey-ramp model); the inverse must find the colour."""
+    proportion to the drive there: the fixed point alone overshoots (measured: up to 0.115
+    ΔE00); the inverse must find the colour."""
     from workbench.colorimetry import delta_E2000
     from workbench.display import GammaMatrixDisplay
     from workbench.display.residual_lut import ResidualLUTDisplay

@@ -103,8 +103,10 @@ class ResidualLUTDisplay(DisplayModel):
 
         The fixed point diverges where the base is flat and the residual is not: near a
         channel's zero a power-law tone curve barely moves while the trilinear residual moves in
-        proportion to the drive, so each step overshoots (on a grey-ramp model of a real LCD it
-        stopped 4 counts of blue from a colour with none, 0.18 ΔE00 away).
+        proportion to the drive, so each step overshoots (a base whose blue rises as d^2.6
+        under a residual linear in blue: colours with 0–3 counts of blue missed by up to 0.115
+        ΔE00; a grey-ramp model of a real LCD whose dark ends followed a power law stopped 4
+        counts of blue from a colour with none, 0.18 ΔE00 away).
         """
         target = XYZ.reshape(-1, 3)
         start = rgb.reshape(-1, 3).astype(float)
