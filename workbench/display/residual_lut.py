@@ -97,16 +97,16 @@ class ResidualLUTDisplay(DisplayModel):
     """Largest XYZ miss, relative to the white's Y, that counts as the colour found."""
 
     def _polish(self, XYZ: np.ndarray, rgb: np.ndarray) -> np.ndarray:
-        """Gauss–Newton on ``forward(rgb) = XYZ`` within 0–255, each step halved until it
-        lowers the miss, for the rows the fixed point misses; a row whose colour is not then found within
+        """Gauss–Newton on ``forward(rgb) = XYZ`` within 0–255 for the rows the fixed point
+        misses: each step taken at the fraction (1 down to 1/512) that lowers the miss most, a
+        row closed when no fraction does. A row whose colour is not then found within
         :data:`POLISH_TOLERANCE` keeps the fixed point's DAC.
 
         The fixed point diverges where the base is flat and the residual is not: near a
         channel's zero a power-law tone curve barely moves while the trilinear residual moves in
         proportion to the drive, so each step overshoots (a base whose blue rises as d^2.6
         under a residual linear in blue: colours with 0–3 counts of blue missed by up to 0.115
-        ΔE00; a grey-ramp model of a real LCD whose dark ends followed a power law stopped 4
-        counts of blue from a colour with none, 0.18 ΔE00 away).
+        ΔE00).
         """
         target = XYZ.reshape(-1, 3)
         start = rgb.reshape(-1, 3).astype(float)
@@ -130,8 +130,7 @@ class ResidualLUTDisplay(DisplayModel):
             ridge = 1e-12 * np.einsum("nii->n", normal)[:, None, None] * np.eye(3)
             delta = -np.linalg.solve(normal + ridge,
                                      np.einsum("nki,nk->ni", jacobian, f)[..., None])[..., 0]
-            # the Gauss–Newton step, halved until it lowers the miss (a flat channel's step
-            # overshoots, and the box 0–255 cuts it)
+            # a flat channel's full step overshoots, and the box 0–255 cuts it
             best, best_cost = x, np.sum(f ** 2, axis=1)
             for fraction in 0.5 ** np.arange(10):
                 trial = np.clip(x + fraction * delta, 0.0, 255.0)
