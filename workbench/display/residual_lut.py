@@ -113,13 +113,14 @@ class ResidualLUTDisplay(DisplayModel):
         rgb = start.copy()
         tolerance = self.POLISH_TOLERANCE * float(self.white_XYZ[1])
         step = 0.05  # counts, for the finite-difference Jacobian
-        open_ = np.ones(rgb.shape[0], dtype=bool)
+        index = np.arange(rgb.shape[0])  # the rows still open
         for _ in range(30):
-            miss = self.forward(rgb) - target
-            open_ &= np.abs(miss).max(axis=1) > tolerance
-            if not open_.any():
+            f = self.forward(rgb[index]) - target[index]
+            keep = np.abs(f).max(axis=1) > tolerance
+            index, f = index[keep], f[keep]
+            if not index.size:
                 break
-            x, goal, f = rgb[open_], target[open_], miss[open_]
+            x, goal = rgb[index], target[index]
             jacobian = np.empty(x.shape + (3,))
             for c in range(3):
                 h = np.where(x[:, c] + step <= 255.0, step, -step)
@@ -138,9 +139,8 @@ class ResidualLUTDisplay(DisplayModel):
                 take = cost < best_cost
                 best = np.where(take[:, None], trial, best)
                 best_cost = np.where(take, cost, best_cost)
-            moved = np.any(best != x, axis=1)
-            rgb[np.flatnonzero(open_)] = best
-            open_[np.flatnonzero(open_)[~moved]] = False
+            rgb[index] = best
+            index = index[np.any(best != x, axis=1)]
         found = np.abs(self.forward(rgb) - target).max(axis=1) <= tolerance
         return np.where(found[:, None], rgb, start).reshape(XYZ.shape)
 
