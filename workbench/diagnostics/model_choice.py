@@ -194,7 +194,7 @@ mixtures among the fit rows; :func:`choose_model`). A tie-break, so less than
 :func:`choose_model`'s notes (87 greys, no mixtures among its fit rows) was decided at z 2.05,
 and a small change to the grey ramp's curves (tried, not kept) moved it to 1.99 and the export
 to the extension: 0.381 ΔE00 on its 434 held-out mixtures, where the sweep correction scores
-0.305 (the seed authors' method 0.306). At 1 no session of the peer bench (360 grey-ramp
+0.305 (the seed authors' method 0.306). At 1 no session of the peer bench (540 grey-ramp
 sessions on three seed sets) and none of 61 held-back real sessions changed. With no threshold
 at all, three generated sessions were changed for the worse on greys gains of 0.003–0.017."""
 
