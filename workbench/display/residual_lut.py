@@ -84,7 +84,7 @@ class ResidualLUTDisplay(DisplayModel):
         """The fixed point's DAC, polished by Gauss–Newton steps where it misses a colour the
         display can show (:meth:`_polish`); out of gamut, clipped as every model's."""
         XYZ = as_XYZ(XYZ)
-        drive = self.base.linear_drive(XYZ - self.residual(self._fixed_point(XYZ)))
+        drive = self.linear_drive(XYZ)
         clipped = np.clip(drive, 0.0, 1.0)
         dac = self.base.dac_from_drive(clipped)
         # nearly in gamut: where the fixed point's own miss may be all that clipping removed
