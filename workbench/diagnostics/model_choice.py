@@ -372,7 +372,6 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                   -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES and power_limit else 0.0)
         others = paired_gain(_without_whites(chosen_errors), _without_whites(errors))
         mixtures = (_mixtures_only(chosen_errors), _mixtures_only(errors))
-        greys = paired_gain(_greys_only(chosen_errors), _greys_only(errors))
         if gain > needed and np.isfinite(scores[name]) and name in GREY_RAMP_CANDIDATES:
             # without mixtures among the fit rows, the rows that could tell a flexible
             # interaction from the identified cause's are the candidate's own table points
@@ -402,6 +401,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                          f"{mixtures[0][0].size} mixtures worse by "
                          f"{-paired_gain(*mixtures)[0]:.3f}")
             continue
+        greys = paired_gain(_greys_only(chosen_errors), _greys_only(errors))
         if (not gain > needed and chosen == "extension" and name in GREY_RAMP_CANDIDATES
                 and np.isfinite(scores[name]) and mixtures[0] is None
                 and gain > -CV_Z * standard_error and greys[0] > GREYS_TIE_Z * greys[1]
