@@ -48,3 +48,54 @@ def test_a_shoulder_beside_a_step_is_still_named(seed):
     effects = {"tone-curve-shape": "shoulder", "temporal-drift": "step"}
     diagnosis = diagnose(generate_session(effects, seed=seed, plan="paper").session)
     assert {"tone-curve-shape", "temporal-drift"} <= {f.effect for f in diagnosis.findings}
+
+
+def test_the_tone_fit_leaves_out_the_levels_a_drift_correction_knows_less_well_than_noise():
+    from dataclasses import replace
+
+    from workbench.diagnostics.detectors import build_context, drift_form
+    from workbench.diagnostics.extension import MIN_SETTLED_LEVELS, settled_levels
+
+    session = generate_session({"temporal-drift": "step"}, seed=1, plan="paper",
+                               noise=0.002).session.without("validation")
+    context = build_context(session)
+    assert drift_form(context.drift, context.noise).startswith("a step")
+    sweep = replace(context.sweeps[1], correction_sd=None)  # green: about 0.2 % from half drive
+    assert settled_levels(sweep, context) is sweep  # no correction: every level
+    uncertain = np.where((sweep.drive > 0.5) & (sweep.drive < 0.8), 0.01, 0.0)
+    settled = settled_levels(replace(sweep, correction_sd=uncertain), context)
+    assert np.all((settled.drive <= 0.5) | (settled.drive >= 0.8))
+    assert settled.drive.size == sweep.drive.size - int(np.sum(uncertain > 0))
+    assert settled.drive[-1] == 1.0 and settled.XYZ.shape == (settled.drive.size, 3)
+    # an uncertainty below the level's own noise keeps it
+    assert settled_levels(replace(sweep, correction_sd=uncertain / 100), context).drive.size == \
+        sweep.drive.size
+    # too few levels would be left: the sweep is kept whole
+    most = np.where(sweep.drive < 1.0, 1.0, 0.0)
+    most[:MIN_SETTLED_LEVELS - 1] = 0.0
+    assert settled_levels(replace(sweep, correction_sd=most), context).drive.size == sweep.drive.size
+    # a drift that is not a step (a warm-up, a wander) is corrected along its trend: kept whole
+    wander = build_context(generate_session({"temporal-drift": "step"}, seed=0, plan="paper",
+                                            noise=0.002).session.without("validation"))
+    assert not drift_form(wander.drift, wander.noise).startswith("a step")
+    kept = replace(wander.sweeps[1], correction_sd=np.full(wander.sweeps[1].drive.size, 0.01))
+    assert settled_levels(kept, wander) is kept
+
+
+def test_a_step_during_a_sweep_no_longer_tilts_the_tone_curve_on_a_grey_ramp_plan():
+    # the peer bench's bluish black beside a step (paper+greys): the step fell while blue's
+    # levels 5–115 were measured; read at the instrument's noise they tilted blue's γ, and the
+    # exported model lost to the seed authors' grey ramp (0.150 against 0.113 ΔE00)
+    from tests.diagnostics.independent_generator import hidden_colours
+    from workbench.colorimetry import delta_E2000
+    from workbench.diagnostics.authors import fit_grey_ramp_linearisation
+
+    generated = generate_session({"black-offset": "bluish", "temporal-drift": "step"},
+                                 seed=32005, plan="paper+greys")
+    diagnosis = diagnose(generated.session)
+    rgb = hidden_colours(300, 32005)
+    truth = generated.reference_XYZ(rgb)
+    ours = float(np.mean(delta_E2000(diagnosis.extended.forward(rgb), truth, diagnosis.white)))
+    authors = float(np.mean(delta_E2000(
+        fit_grey_ramp_linearisation(generated.session).forward(rgb), truth, diagnosis.white)))
+    assert ours < authors - 0.03, (ours, authors)

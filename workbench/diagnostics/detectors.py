@@ -118,6 +118,7 @@ __all__ = [
     "build_context",
     "run_detectors",
     "detect_temporal_drift",
+    "drift_form",
     "detect_black_offset",
     "detect_channel_interaction",
     "common_gain_test",
@@ -325,6 +326,12 @@ def _drift_form(drift: DriftCorrection, sd: float) -> str:
     return "a wander (the display is unstable)"
 
 
+def drift_form(drift: DriftCorrection, noise: NoiseModel) -> str:
+    """The drift's form (warm-up, decline, step, wander, slow trend) at the references' noise."""
+    Y = drift.luminances
+    return _drift_form(drift, float(np.median(noise.sd_Y(Y) / Y)))
+
+
 def _trend_chi2(times: np.ndarray, Y: np.ndarray, sd: np.ndarray, degree: int) -> float:
     """χ² a weighted Legendre polynomial in time of ``degree`` explains beyond the weighted mean."""
     span = float(np.ptp(times))
@@ -372,7 +379,7 @@ def detect_temporal_drift_raw(drift: DriftCorrection | None, time_basis: str,
     p_any = p
     p = min(1.0, 2.0 * min(p_any, p_trend))
     relative_sd = float(np.median(sd / Y))
-    form = _drift_form(drift, relative_sd)
+    form = drift_form(drift, noise)
     unit = "s" if time_basis == "time" else ""
     where = ("over the session" if time_basis == "time" else
              "over the session's rows (no times: tested on row order, the order of measurement)")
