@@ -122,7 +122,6 @@ def test_a_channel_specific_interaction_on_the_paper_plan_takes_the_crosstalk_sh
     assert diagnosis.gain_pct >= 50
 
 
-
 def test_a_crosstalk_fitted_on_greys_meets_the_white_its_eleven_references_measure():
     # with greys the co-drive amounts are a least-squares fit over the greys and the white; the
     # white is the mean of eleven references on paper+greys, and weighed as one grey the term
@@ -143,6 +142,7 @@ def test_a_crosstalk_fitted_on_greys_meets_the_white_its_eleven_references_measu
         misses.append(float(delta_E2000(model.forward(np.full((1, 3), 255.0)),
                                         context.white[None], context.white)[0]))
     assert max(misses) < 0.6, misses
+
 
 def test_a_significant_chromaticity_shift_that_does_not_beat_noise_stays_out_of_the_model():
     # log-desaturation at 0.1 % noise: the dark sweep points' xy move (z ≫ critical), but the

@@ -37,8 +37,8 @@ from workbench.display.tone_curves import PowerCurve, fit_tone_curve, select_ton
 
 __all__ = ["TERMS", "TONE_CHANGING_EFFECTS", "PARAMETRIC_TONE_FORMS",
            "DEFAULT_INTERACTION_EXPONENT", "MATERIALITY_INTERACTION_EXPONENT", "CROSSTALK_EXPONENT",
-           "MIN_SETTLED_LEVELS", "fitted_on", "fit_extended", "grey_channel_outputs", "interaction_shape",
-           "settled_levels"]
+           "MIN_SETTLED_LEVELS", "fitted_on", "fit_extended", "grey_channel_outputs",
+           "interaction_shape", "settled_levels"]
 
 TERMS = {
     "temporal-drift": "drift correction from the white references",
@@ -215,17 +215,17 @@ def _interaction_term(context: DiagnosisContext, default_exponent: float = DEFAU
     then displaced on 3 of 180 peer-bench sessions (0.127 → 0.167, 0.135 →
     0.287 and 0.061 → 0.111 ΔE00; it improved two others, 0.415 → 0.189 and
     0.156 → 0.124, where it displaced the sweep correction: a trade, not a
-    gain, so the common-gain case is left as it was). Fixing the amounts at the white outright
-    (the greys choosing ``p`` alone) did as well on that display (0.103) and
-    cost two real LCD charts 0.16–0.18 ΔE00. Not where a drift correction is
-    applied either: the whites are then its references, corrected toward the
-    curve drawn through them, and their mean is as good as the correction's
-    reference state, not the mean of independent readings. Weighed by count
-    there, a real Surface Pro 3 chart (four whites, a drift found) kept the
-    drift among the extension's terms, so the model choice ran on the
-    drift-corrected rows, and the grey ramp it exported scored 1.587 ΔE00 on
-    the held-out colours where it scored 1.411 (the seed authors' method
-    1.412).
+    gain, so the common-gain case is left as it was). Fixing the amounts at
+    the white outright (the greys choosing ``p`` alone) did as well on that
+    display (0.103) and cost two real LCD charts 0.16–0.18 ΔE00. Not where a
+    drift correction is applied either: the whites are then its references,
+    corrected toward the curve drawn through them, and their mean is as good
+    as the correction's reference state, not the mean of independent
+    readings. Weighed by count there, a real Surface Pro 3 chart (four
+    whites, a drift found) kept the drift among the extension's terms, so
+    the model choice ran on the drift-corrected rows, and the grey ramp it
+    exported scored 1.587 ΔE00 on the held-out colours where it scored 1.411
+    (the seed authors' method 1.412).
     """
     matrix = np.column_stack([s.full_XYZ for s in context.sweeps])
     white = context.white - context.black
