@@ -379,7 +379,7 @@ def detect_temporal_drift_raw(drift: DriftCorrection | None, time_basis: str,
     p_any = p
     p = min(1.0, 2.0 * min(p_any, p_trend))
     relative_sd = float(np.median(sd / Y))
-    form = drift_form(drift, noise)
+    form = _drift_form(drift, relative_sd)
     unit = "s" if time_basis == "time" else ""
     where = ("over the session" if time_basis == "time" else
              "over the session's rows (no times: tested on row order, the order of measurement)")
