@@ -114,8 +114,9 @@ class ResidualLUTDisplay(DisplayModel):
         tolerance = self.POLISH_TOLERANCE * float(self.white_XYZ[1])
         step = 0.05  # counts, for the finite-difference Jacobian
         index = np.arange(rgb.shape[0])  # the rows still open
+        miss = self.forward(rgb) - target  # each row's, kept as its DAC moves
         for _ in range(30):
-            f = self.forward(rgb[index]) - target[index]
+            f = miss[index]
             keep = np.abs(f).max(axis=1) > tolerance
             index, f = index[keep], f[keep]
             if not index.size:
@@ -132,16 +133,18 @@ class ResidualLUTDisplay(DisplayModel):
             delta = -np.linalg.solve(normal + ridge,
                                      np.einsum("nki,nk->ni", jacobian, f)[..., None])[..., 0]
             # a flat channel's full step overshoots, and the box 0–255 cuts it
-            best, best_cost = x, np.sum(f ** 2, axis=1)
+            best, best_f, best_cost = x, f, np.sum(f ** 2, axis=1)
             for fraction in 0.5 ** np.arange(10):
                 trial = np.clip(x + fraction * delta, 0.0, 255.0)
-                cost = np.sum((self.forward(trial) - goal) ** 2, axis=1)
+                trial_f = self.forward(trial) - goal
+                cost = np.sum(trial_f ** 2, axis=1)
                 take = cost < best_cost
                 best = np.where(take[:, None], trial, best)
+                best_f = np.where(take[:, None], trial_f, best_f)
                 best_cost = np.where(take, cost, best_cost)
-            rgb[index] = best
+            rgb[index], miss[index] = best, best_f
             index = index[np.any(best != x, axis=1)]
-        found = np.abs(self.forward(rgb) - target).max(axis=1) <= tolerance
+        found = np.abs(miss).max(axis=1) <= tolerance
         return np.where(found[:, None], rgb, start).reshape(XYZ.shape)
 
     def dac_from_drive(self, drive) -> np.ndarray:
