@@ -396,8 +396,9 @@ def diagnose(session: Session) -> Diagnosis:
     if "temporal-drift" not in found and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
                                 load_session=load_session)
-    terms, cross_validation = select_terms(context, found, baseline,
-                                           {r.effect: r.impact_dE00 for r in results}, tone_forms)
+    terms, cross_validation = select_terms(
+        context, found, baseline, {r.effect: r.impact_dE00 for r in results}, tone_forms,
+        drift_z=next((r.z for r in results if r.effect == "temporal-drift"), None))
     if terms and "temporal-drift" not in terms and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
                                 load_session=load_session)
