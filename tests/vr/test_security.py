@@ -133,10 +133,13 @@ def test_vr_serve_prints_the_url_and_qr_code_and_stops_on_ctrl_c(tmp_path, vive_
 
     port = free_port()
     root = Path(__file__).resolve().parents[2]
+    # Ctrl-C at a terminal: SIGINT at its default action. A test run started as a background job
+    # of a non-interactive shell inherits SIGINT ignored, and Python then installs no handler
     process = subprocess.Popen([sys.executable, "-m", "workbench", "vr", "serve", "--port", str(port),
                                 "--bundle", str(vive_bundle), "--source", "cie-fl11", "--level", "1"],
                                cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               env={**os.environ, "PYTHONIOENCODING": "utf-8"})
+                               env={**os.environ, "PYTHONIOENCODING": "utf-8"},
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         wait_listening(port)
         scene = json.loads(urllib.request.urlopen(f"http://127.0.0.1:{port}/scene.json", timeout=10).read())
