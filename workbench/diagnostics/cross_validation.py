@@ -21,8 +21,8 @@ the cross-validated errors without and with it (same rows, same folds,
 averaged per group as above) exceeds :data:`CV_Z` standard errors of that
 difference, so a chromaticity shift that is significant in its detector but
 predicts unseen fit rows no better than noise allows stays out of the model; a drift found on
-measurement times stays unless it makes the error worse beyond noise
-(:data:`TIMED_DRIFT_Z`). Then the extension is
+measurement times at :data:`TIMED_DRIFT_MIN_Z` or more stays unless it makes the error worse
+beyond noise (:data:`TIMED_DRIFT_Z`). Then the extension is
 kept only if its cross-validated error is below the baseline's (each of its
 terms has already beaten noise). Tone-curve forms are chosen
 once, on all fit rows, and refitted in the folds; each fold's baseline (the
@@ -68,8 +68,8 @@ colours) and whose cross-validated gain is spread over a few rows among many, so
 difference is noisy even where the drift is plain; and ``channel-interaction``, whose detector
 already tests the quantity its term fits (the white against the sum of the primaries) and
 whose cross-validated gain rests on the few white references and mixtures a plan holds. Both
-need only not make the cross-validated error worse; a drift tested on measurement times need
-only not make it worse beyond noise (:data:`TIMED_DRIFT_Z`)."""
+need only not make the cross-validated error worse; a plain drift tested on measurement times
+need only not make it worse beyond noise (:data:`TIMED_DRIFT_Z`)."""
 
 TIMED_DRIFT_Z = CV_Z
 """Where the session has measurement times and the drift test's z reaches
@@ -79,13 +79,13 @@ The drift test found the display changing far beyond noise over the session; the
 correction carries every row to the display's settled state, the state the profile is for.
 Cross-validation scores the fit rows as measured, each at its own time, where a model fitted to
 the uncorrected rows predicts their time average and does nearly as well; it cannot score the
-settled state. On the peer bench's warm-ups during the sweeps (``paper+greys``, seeds 32000) the
-correction was left out on gains of −0.012 ± 0.022 and −0.010 ± 0.019 and the paper's model
-exported from the uncorrected rows scored 0.155 and 0.216 mean ΔE00 on hidden colours; with the
-correction 0.134 and 0.136 (the seed authors' method 0.128 and 0.147). On row order (a chart
-with no times) the correction must still not make the error worse at all: the order only
-stands in for time, and on two real LCD charts whose drift was found on row order, kept within
-noise it cost 0.16 and 0.18 ΔE00 on the held-out colours."""
+settled state. On the peer bench's warm-ups during the sweeps (``paper+greys``, seeds 32001 and
+32005) the correction was left out on gains of −0.012 ± 0.022 and −0.010 ± 0.019 and the
+paper's model exported from the uncorrected rows scored 0.155 and 0.216 mean ΔE00 on hidden
+colours; with the correction 0.134 and 0.136 (the seed authors' method 0.128 and 0.147). On
+row order (a chart with no times) the correction must still not make the error worse at all:
+the order only stands in for time, and on two real LCD charts whose drift was found on row
+order, kept within noise it cost 0.16 and 0.18 ΔE00 on the held-out colours."""
 
 TIMED_DRIFT_MIN_Z = 4.0
 """The drift test's z from which :data:`TIMED_DRIFT_Z` applies (one-sided p about 3e-5). A drift
