@@ -147,7 +147,12 @@ def test_vr_serve_prints_the_url_and_qr_code_and_stops_on_ctrl_c(tmp_path, vive_
         time.sleep(0.2)
     finally:
         process.send_signal(signal.SIGINT)
-        out, err = process.communicate(timeout=20)
+        try:
+            out, err = process.communicate(timeout=20)
+        except subprocess.TimeoutExpired:  # a server that ignored Ctrl-C is not left running
+            process.kill()
+            process.communicate()
+            raise
     assert process.returncode == 0, err
     assert f"Open http://127.0.0.1:{port}/ in the headset's browser (or scan):" in out
     assert "▀" in out or "█" in out  # the QR code
