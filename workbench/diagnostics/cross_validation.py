@@ -11,7 +11,10 @@ the fold's rows; the score is the mean CIEDE2000 of those predictions
 (CIELAB white: the session's measured white) per group of rows — sweep
 points, greys, white references, other mixtures — averaged over the groups,
 so each kind of evidence counts the same however many rows the plan spends
-on it (the paper's plan has 153 sweep points and 10 whites).
+on it (the paper's plan has 153 sweep points and 10 whites). Errors come in row
+order, so two results of one context pair row by row whatever folds each used
+(the model choice scores a coarse grey ramp with its greys in folds of their
+own: :data:`~workbench.diagnostics.model_choice.COARSE_GREY_STEP`).
 
 Selection (:func:`select_terms`): start from every found effect; remove,
 one at a time from the least material, each term whose removal does not make
@@ -95,8 +98,13 @@ drift (a backlight interaction), kept within noise, took the held-out error from
 The warm-ups that the rule mends were found at z 5.4 to 23."""
 
 
-def fold_of_rows(context: DiagnosisContext, folds: int = FOLDS) -> np.ndarray:
-    """Fold index of each fit row; -1 for rows every training set keeps."""
+def fold_of_rows(context: DiagnosisContext, folds: int = FOLDS,
+                 greys_apart: bool = False) -> np.ndarray:
+    """Fold index of each fit row; -1 for rows every training set keeps.
+
+    ``greys_apart``: the partial greys (where free) go to two folds of their own, ``folds`` and
+    ``folds + 1``, alternate levels in each, so every other row is predicted from the whole ramp.
+    """
     session = context.raw
     rgb = session.rgb
     lit = rgb > 0
@@ -119,24 +127,30 @@ def fold_of_rows(context: DiagnosisContext, folds: int = FOLDS) -> np.ndarray:
     white = np.all(rgb >= 255, axis=1)
     if white.any() and np.unique(fold[white]).size == 1 and fold[white][0] >= 0:
         fold[np.flatnonzero(white)[0]] = -1
+    if greys_apart:
+        own = greys & (fold >= 0)
+        levels, rank = np.unique(rgb[own, 0], return_inverse=True)
+        fold[own] = folds + rank % 2
     return fold
 
 
 def cross_validated_errors_of(context: DiagnosisContext, fit_model, drift: bool = False,
-                              folds: int = FOLDS) -> tuple[np.ndarray, np.ndarray] | None:
+                              folds: int = FOLDS,
+                              greys_apart: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
     """Per-row ΔE00 of the fit rows predicted by ``fit_model`` fitted without them, and groups.
 
     ``fit_model(fold_context, fold_baseline)`` returns a display model from a
     fold's training rows (``fold_context`` built with the drift correction
     when ``drift``; the fold's predictions are then multiplied by its drift
-    gain at the held-out rows' times). Rows come in the same order for every
-    model of one context, so two results can be compared row by row. None
+    gain at the held-out rows' times). Rows come in row order for every
+    model of one context, so two results can be compared row by row, also where
+    one of them held the greys apart (``greys_apart``: :func:`fold_of_rows`). None
     where a fold's model cannot be fitted.
     """
     session = context.raw
-    fold = fold_of_rows(context, folds)
-    errors, groups = [], []
-    for k in range(folds):
+    fold = fold_of_rows(context, folds, greys_apart)
+    errors, groups, rows = [], [], []
+    for k in range(folds + 2 * greys_apart):
         test = fold == k
         if not test.any():
             continue
@@ -153,9 +167,11 @@ def cross_validated_errors_of(context: DiagnosisContext, fit_model, drift: bool 
             return None
         errors.append(delta_E2000(predicted, held.XYZ, context.white))
         groups.append(_group_of_rows(held.rgb))
+        rows.append(np.flatnonzero(test))
     if not errors:
         return None
-    return np.concatenate(errors), np.concatenate(groups)
+    order = np.argsort(np.concatenate(rows))  # row order, whatever the folds
+    return np.concatenate(errors)[order], np.concatenate(groups)[order]
 
 
 def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, tone_forms=None,
