@@ -241,7 +241,8 @@ error: apart it was preferred on two clean displays of the diagnosis suite by 0.
 against an extension with the interaction's own term a grey-ramp candidate must win beyond noise
 (a knee of the peer bench went to the grey ramp, 0.307 → 0.600 mean ΔE00 on hidden colours).
 On a fine ramp (the authors' plan, a grey every 5 DAC) a fold thins it little, and the folds
-apart changed five sessions of the peer bench for the worse: the common folds stand there.
+apart changed five sessions of the peer bench for the worse (nine with the rules above, four
+better: clean displays went to the paper's model): the common folds stand there.
 ``grey-ramp+sweeps`` keeps the common folds: apart, it won two clean displays of the diagnosis
 suite at the white references and lost on their validation colours."""
 
