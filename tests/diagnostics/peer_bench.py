@@ -119,9 +119,17 @@ class PeerOutcome:
         return self.ours_dE00 > self.authors_dE00 + WORSE_BY
 
 
+def hidden_score(generated, model, white, seed: int) -> float:
+    """Mean ΔE00 of ``model`` on the :data:`HIDDEN_COLOURS` hidden colours of ``seed``, against
+    the true display of ``generated`` (CIELAB white ``white``)."""
+    from workbench.colorimetry import delta_E2000
+
+    rgb = hidden_colours(HIDDEN_COLOURS, seed)
+    return float(np.mean(delta_E2000(model.forward(rgb), generated.reference_XYZ(rgb), white)))
+
+
 def _session_outcome(plan: str, scenario: str, effects: dict, seed: int,
                      strict: bool = False) -> PeerOutcome:
-    from workbench.colorimetry import delta_E2000
     from workbench.diagnostics import diagnose
     from workbench.diagnostics.authors import fit_grey_ramp_linearisation
     from workbench.errors import InputError
@@ -138,12 +146,8 @@ def _session_outcome(plan: str, scenario: str, effects: dict, seed: int,
                            baseline_dE00=np.nan, authors_dE00=None,
                            error=f"{type(error).__name__}: {error}",
                            seconds=time.perf_counter() - started)
-    rgb = hidden_colours(HIDDEN_COLOURS, seed)
-    truth = generated.reference_XYZ(rgb)
-    white = diagnosis.white
-
     def score(model) -> float:
-        return float(np.mean(delta_E2000(model.forward(rgb), truth, white)))
+        return hidden_score(generated, model, diagnosis.white, seed)
 
     try:
         authors, unavailable = score(fit_grey_ramp_linearisation(generated.session)), ""

@@ -8,23 +8,17 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import numpy as np
-
-from tests.diagnostics.independent_generator import generate_session, hidden_colours
-from workbench.colorimetry import delta_E2000
+from tests.diagnostics.independent_generator import generate_session
+from tests.diagnostics.peer_bench import hidden_score
 from workbench.diagnostics import diagnose
 from workbench.diagnostics.authors import fit_grey_ramp_linearisation
 
 
 def _hidden_scores(generated, diagnosis, seed):
     """Mean ΔE00 on 300 hidden colours: the exported profile's and the seed authors' method's."""
-    rgb = hidden_colours(300, seed)
-    truth = generated.reference_XYZ(rgb)
-
-    def score(model):
-        return float(np.mean(delta_E2000(model.forward(rgb), truth, diagnosis.white)))
-
-    return score(diagnosis.extended), score(fit_grey_ramp_linearisation(generated.session))
+    authors = fit_grey_ramp_linearisation(generated.session)
+    return (hidden_score(generated, diagnosis.extended, diagnosis.white, seed),
+            hidden_score(generated, authors, diagnosis.white, seed))
 
 
 def test_a_plain_drift_on_measurement_times_stays_within_noise():
