@@ -9,6 +9,7 @@ then scored on a thinned ramp it never exports. Sessions from the independent ge
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from tests.diagnostics.independent_generator import generate_session
 from tests.diagnostics.peer_bench import hidden_score
@@ -62,6 +63,18 @@ def test_errors_come_in_row_order_whatever_the_folds():
 def test_only_a_coarse_grey_ramp_is_held_out_apart():
     assert coarse_grey_ramp(_context("paper+greys"))  # a grey every 16 DAC
     assert not coarse_grey_ramp(_context("authors-2024"))  # a grey every 5 DAC
+
+
+@pytest.mark.parametrize("levels, apart", [(5, False), (6, True)])
+def test_a_short_coarse_ramp_stays_in_the_common_folds_and_nothing_is_inf(levels, apart):
+    # held apart, five levels left a fold two to fit the grey ramp on: its score was inf
+    session = generate_session({}, seed=31009, plan="paper+greys").session
+    rgb = session.rgb
+    kept = np.unique(rgb[partial_greys(rgb), 0])[::2][:levels]  # a grey every 32 DAC
+    session = session.subset(~(partial_greys(rgb) & ~np.isin(rgb[:, 0], kept)))
+    assert coarse_grey_ramp(build_context(session.without("validation"))) is apart
+    scores = diagnose(session).model_choice.cv_mean_dE00
+    assert "grey-ramp" in scores and all(np.isfinite(v) for v in scores.values()), scores
 
 
 def _hidden_scores(generated, diagnosis, seed):

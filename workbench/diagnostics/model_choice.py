@@ -248,10 +248,17 @@ suite at the white references and lost on their validation colours."""
 
 
 def coarse_grey_ramp(context: DiagnosisContext) -> bool:
-    """Whether the fit rows' grey levels lie :data:`COARSE_GREY_STEP` DAC apart or more."""
+    """Whether the fit rows' grey levels lie :data:`COARSE_GREY_STEP` DAC apart or more, and are
+    enough to hold half of them out.
+
+    Each of the two folds of greys holds out every other level, so the grey ramp is fitted on
+    half of them and needs :data:`~workbench.diagnostics.authors.MIN_GREYS` there: with five
+    levels one fold left it two, the fit failed and its cross-validation was ``inf``.
+    """
     rgb = context.raw.rgb
     levels = np.unique(rgb[partial_greys(rgb), 0])
-    return levels.size >= MIN_GREYS and float(np.median(np.diff(levels))) >= COARSE_GREY_STEP
+    return (levels.size >= 2 * MIN_GREYS
+            and float(np.median(np.diff(levels))) >= COARSE_GREY_STEP)
 
 
 def fit_candidate(name: str, context: DiagnosisContext, found=()) -> DisplayModel:
