@@ -127,6 +127,23 @@ def test_a_coarse_grey_ramp_scored_apart_must_beat_the_papers_model_beyond_noise
     assert (apart["grey-ramp"], apart["grey-ramp+sweeps"]) == (coarse, False)
 
 
+def test_a_coarse_grey_ramp_must_beat_the_papers_model_beyond_noise_however_it_was_fitted(
+        given_errors):
+    """The paper's model with noise-weighted γ (chosen first on sparse sweeps) is the paper's
+    model too: a coarse grey ramp scored apart must beat it beyond noise."""
+    given_errors["coarse"] = True
+    rng = np.random.default_rng(13)
+    baseline = _errors(rng, 0.40, 0.40, 0.30, 0.0)
+    weighted = (baseline[0] - 0.05, baseline[1])  # beyond noise: taken first
+    given_errors["weighted-gamma"] = weighted
+    given_errors["weighted-gamma+greys"] = (baseline[0] + 0.1, baseline[1])
+    given_errors["grey-ramp"] = (weighted[0] - 0.0005 + 0.01 * rng.standard_normal(
+        baseline[0].size), baseline[1])
+    given_errors["grey-ramp+sweeps"] = (baseline[0] + 0.1, baseline[1])
+    choice = model_choice.choose_model(object(), "baseline", baseline, baseline, drift=False)
+    assert choice.chosen == "weighted-gamma", choice.reason
+
+
 @pytest.mark.parametrize("terms, taken", [(("channel-interaction",), False), ((), True)])
 def test_the_grey_ramp_must_beat_noise_against_the_interactions_own_term(
         given_errors, terms, taken):

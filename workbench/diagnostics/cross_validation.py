@@ -129,7 +129,7 @@ def fold_of_rows(context: DiagnosisContext, folds: int = FOLDS,
         fold[np.flatnonzero(white)[0]] = -1
     if greys_apart:
         own = greys & (fold >= 0)
-        levels, rank = np.unique(rgb[own, 0], return_inverse=True)
+        _, rank = np.unique(rgb[own, 0], return_inverse=True)
         fold[own] = folds + rank % 2
     return fold
 

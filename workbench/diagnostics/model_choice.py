@@ -61,7 +61,7 @@ from workbench.errors import InputError
 
 __all__ = ["MODEL_CANDIDATES", "GREY_RAMP_CANDIDATES", "WEIGHTED_CANDIDATES",
            "ALTERNATIVE_CANDIDATES", "IDENTIFIED_CANDIDATES", "NOISE_TESTED_CANDIDATES",
-           "SPARSE_SWEEP_LEVELS", "COARSE_GREY_STEP", "ModelChoice", "choose_model",
+           "SPARSE_SWEEP_LEVELS", "COARSE_GREY_STEP", "PAPERS_MODELS", "ModelChoice", "choose_model",
            "coarse_grey_ramp", "fit_candidate", "has_grey_ramp", "has_sparse_sweep"]
 
 MODEL_CANDIDATES = {
@@ -121,6 +121,10 @@ and the ``+greys`` candidate is a power law fitted to the greys, a parametric ri
 authors' grey ramp: on a real LCD chart (two ramp levels a channel, seven greys) it won the
 cross-validation and lost to the authors' method on the held-out colours (0.533 against 0.465
 mean ΔE00)."""
+
+PAPERS_MODELS = ("baseline",) + WEIGHTED_CANDIDATES
+"""The paper's gamma + 3×3, however its γ were fitted: what a coarse grey ramp scored apart must
+beat beyond noise (:data:`COARSE_GREY_STEP`)."""
 
 ALTERNATIVE_CANDIDATES = ("power-limit",) + WEIGHTED_CANDIDATES + GREY_RAMP_CANDIDATES
 """Candidates other than term selection's model, in the order they are tried."""
@@ -233,7 +237,7 @@ grey with every fifth row, and the authors' straight lines spanned 32 DAC there:
 display of the independent generator the grey ramp then predicted the rows other than the whites
 worse than the paper's model beyond noise (-0.102 ± 0.050), and the paper's model was exported,
 0.188 mean ΔE00 on hidden colours where the grey ramp scores 0.100 (the authors' own method 0.150).
-Scored apart, it must beat the paper's model beyond noise
+Scored apart, it must beat the paper's model (:data:`PAPERS_MODELS`) beyond noise
 (:data:`~workbench.diagnostics.cross_validation.CV_Z` paired standard errors), not only lower its
 error: apart it was preferred on two clean displays of the diagnosis suite by 0.067 ± 0.040 and
 0.031 ± 0.056, and lost to the paper's model on their validation colours (0.210 against 0.179,
@@ -411,7 +415,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         noise_tested = ((name in NOISE_TESTED_CANDIDATES
                          and ("channel-interaction" not in found or physical))
                         or (name in GREY_RAMP_CANDIDATES and physical)
-                        or (name == "grey-ramp" and apart and chosen == "baseline")
+                        or (name == "grey-ramp" and apart and chosen in PAPERS_MODELS)
                         or (chosen in IDENTIFIED_CANDIDATES and name != chosen)
                         or name in WEIGHTED_CANDIDATES)
         needed = (CV_Z * standard_error if noise_tested else
