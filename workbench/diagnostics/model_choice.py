@@ -408,12 +408,11 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
             drift=drift, greys_apart=apart and name == "grey-ramp")
         scores[name] = score(errors)
         gain, standard_error = paired_gain(chosen_errors, errors)
-        # the sweep correction must beat noise on a display not found non-additive, and any
-        # flexible candidate must to replace the model of an identified cause
-        # ... and must beat noise against an extension that models the interaction itself
+        # the sweep correction must beat noise on a display not found non-additive, any
+        # grey-ramp candidate against an extension that models the interaction itself, and any
+        # flexible candidate to replace the model of an identified cause
         physical = chosen == "extension" and "channel-interaction" in extension_terms
-        noise_tested = ((name in NOISE_TESTED_CANDIDATES
-                         and ("channel-interaction" not in found or physical))
+        noise_tested = ((name in NOISE_TESTED_CANDIDATES and "channel-interaction" not in found)
                         or (name in GREY_RAMP_CANDIDATES and physical)
                         or (name == "grey-ramp" and apart and chosen in PAPERS_MODELS)
                         or (chosen in IDENTIFIED_CANDIDATES and name != chosen)
