@@ -7,6 +7,7 @@ deterministic function of its patches: a run cancelled half-way and resumed must
 what an uninterrupted run decides.
 """
 
+from collections import Counter
 from dataclasses import replace
 from types import SimpleNamespace
 
@@ -19,6 +20,7 @@ from workbench.cli import main
 from workbench.measurement.adaptive import (
     DRIFT_REFERENCE_INTERVAL_S,
     MIN_VALIDATION,
+    PRIMARY_READINGS,
     TIME_CAP_SHARE,
     AdaptivePlanner,
     AdaptiveSettings,
@@ -120,6 +122,15 @@ def test_an_interaction_gets_greys_and_mixtures(whole):
     assert {"grey", "mixture"} & set(kinds)
     assert sum(k in ("grey", "mixture") for k in kinds) >= len(kinds) / 2
     assert any("how the channels combine" in d["reason"] for d in _measured(whole.decisions))
+
+
+def test_the_first_decision_reads_each_primary_again(whole):
+    first = whole.decisions[0]
+    assert first["action"] == "primaries" and "column of the matrix" in first["reason"]
+    assert [tuple(p[1:4]) for p in first["patches"]] == [(255, 0, 0), (0, 255, 0), (0, 0, 255)] * 2
+    readings = Counter(tuple(r.rgb) for r in whole.records if r.ok and r.kind != "validation")
+    assert all(readings[p] == PRIMARY_READINGS for p in ((255, 0, 0), (0, 255, 0), (0, 0, 255)))
+    assert sum(d["action"] == "primaries" for d in whole.decisions) == 1
 
 
 def test_drift_references_by_elapsed_time(whole):
@@ -284,6 +295,8 @@ def test_where_every_patch_costs_the_same_fewer_validation_colours_keep_the_time
     assert MIN_VALIDATION <= measured < settings.validation
     assert all(d["validation"] == measured for d in journal.decisions)
     assert f"{measured} of the {settings.validation} asked for" in stop["reason"]
+    # the core is most of the cap here: no room for the primaries' further readings
+    assert not any(d["action"] == "primaries" for d in journal.decisions)
     paper_s = 3.0 * len(measurement_plan("paper", SEED))
     assert sum(r.duration_s for r in journal.records) <= TIME_CAP_SHARE * paper_s + 3.0
     for journaled, replayed in replay_decisions(journal):

@@ -4,7 +4,8 @@
 small core (:func:`adaptive_core_plan`: a white, the black, each primary at
 full drive, :data:`CORE_LEVELS` per channel, the greys :data:`CORE_GREYS`,
 and a white), then asks :class:`AdaptivePlanner` after each measurement what
-to measure next. Each decision is a deterministic function of the journal's
+to measure next. Its first decision reads each primary again, up to
+:data:`PRIMARY_READINGS` readings, where the time cap leaves room for them. Each decision is a deterministic function of the journal's
 measurements and the seed, and is journaled (a ``decision`` record, fsynced
 before its patch is shown) with its reason, e.g. ``"blue tone curve between
 DAC 32 and 64: predicted held-out ΔE00 0.310 → 0.270 for 6 s"``; a run
@@ -33,7 +34,7 @@ How it chooses (each decision):
    ``MEAS,1`` announced and the seconds each patch took in this session,
    against luminance; the candidate's luminance as the surrogate predicts it).
 5. The candidate with the largest predicted reduction per second is chosen,
-   unless a drift reference is due: a white once
+   unless the primaries' readings are due (the first decision) or a drift reference is: a white once
    :data:`DRIFT_REFERENCE_INTERVAL_S` of session time have passed since the
    last one (by elapsed time, not by patch count).
 
@@ -68,7 +69,7 @@ from workbench.measurement.patch_cost import PatchCostModel, fit_patch_cost
 from workbench.measurement.plans import MeasurementPlan, Patch, measurement_plan_paper
 from workbench.measurement.planning_model import PlanningModel, PlanningRows, planning_colours
 
-__all__ = ["ADAPTIVE_PLAN", "CORE_LEVELS", "CORE_GREYS", "DRIFT_REFERENCE_INTERVAL_S",
+__all__ = ["ADAPTIVE_PLAN", "CORE_LEVELS", "PRIMARY_READINGS", "CORE_GREYS", "DRIFT_REFERENCE_INTERVAL_S",
            "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "MIN_VALIDATION", "PAPER_SHARE", "TIME_CAP_SHARE",
            "MIN_ADAPTIVE_S", "CHECKPOINT_GROWTH", "validation_count",
            "SWEEP_STEP", "GREY_STEP", "MIXTURE_CUBE", "AdaptiveSettings", "Decision", "PlanState",
@@ -97,6 +98,23 @@ displays the adaptive plan then missed the paper plan's hidden error by more tha
 rather than 12, at most 33 % of the paper plan's time (31 % before). Without the grey at DAC 8
 it was not enough (0.192 and 0.133 on the first two toe displays), nor with it but without
 those at 24 and 40 (0.182 and 0.135)."""
+
+PRIMARY_READINGS = 3
+"""Readings of each primary at full drive: the core's one, and two more at the first decision
+(:meth:`AdaptivePlanner.decide`), where the session still fits its budget or time cap with them
+and at least :data:`MIN_VALIDATION` validation colours (where every patch costs about the same, a
+short dark end, the core alone is most of the cap: then they are left out). A primary's
+full-drive XYZ is a column of the matrix and the top of its tone curve, so one reading's noise
+reaches every colour the channel lights: at 0.3 % relative noise, red and green 0.3 % high and
+blue right tint every light grey yellow by 0.1–0.2 ΔE00. The paper plan reads each primary once
+too, but its 51 levels a channel average the rest of the noise that the core's ten cannot; a
+bright primary costs a few seconds. On the plans bench the adaptive plan missed the paper plan's
+hidden error + 0.02 on 2 of the 100 displays of seeds 40000–40003 (4 with one reading; mean
+hidden ΔE00 0.072 → 0.066) and on 20 of the 100 of seeds 41001–41004, which the plan was never
+tuned on (32; 0.109 → 0.095), at most 33.2 % of the paper plan's time. Read in the core itself
+(at the start, the middle and the end of each sweep) they missed on 5 and 14, but where every
+patch costs the same the core and the fewest validation colours then passed the cap (35.5 % of
+the paper plan's time)."""
 
 DRIFT_REFERENCE_INTERVAL_S = 60.0
 """A white is measured once this much session time has passed since the last one. A white costs a
@@ -249,7 +267,8 @@ class Decision:
     number : int
         1 for the first decision.
     action : str
-        ``"measure"``, ``"drift-reference"`` or ``"stop"``.
+        ``"measure"``, ``"primaries"`` (:data:`PRIMARY_READINGS`), ``"drift-reference"`` or
+        ``"stop"``.
     patches : tuple of Patch
         What it adds to the plan (the stop: the validation colours and a last white).
     reason : str
@@ -470,9 +489,13 @@ class AdaptivePlanner:
         if self.settings.budget_min is None and not decisions:
             paper = np.array([p.rgb for p in measurement_plan_paper(self.settings.seed).patches], dtype=float)
             paper_s = float(cost.seconds(paper_luminance(model, paper)).sum())
-        validation, fewer = self._validation(decisions, seconds, elapsed, paper_s)
+        repeats = self._primary_repeats(records)
+        repeats_s = seconds(repeats)
+        if repeats and not decisions and not self._repeats_fit(seconds, elapsed + repeats_s, paper_s):
+            repeats, repeats_s = [], 0.0
+        validation, fewer = self._validation(decisions, seconds, elapsed + repeats_s, paper_s)
         reserve = seconds(list(validation) + [Patch("white", _WHITE)])
-        budget = self._budget_s(decisions, paper_s, elapsed, reserve)
+        budget = self._budget_s(decisions, paper_s, elapsed + repeats_s, reserve)
         common = dict(number=number, predicted_dE00=before, elapsed_s=elapsed, budget_s=budget,
                       measured_before=measured_before, findings=findings, validation=len(validation))
 
@@ -487,6 +510,13 @@ class AdaptivePlanner:
         target = self.settings.target_dE00
         if target is not None and before <= target:
             return stop(f"the predicted held-out ΔE00 reached the target {target:g}")
+        if repeats and elapsed + repeats_s + reserve <= budget:
+            return Decision(action="primaries", patches=tuple(repeats), predicted_after_dE00=None,
+                            cost_s=repeats_s,
+                            reason=(f"each primary at full drive again, {PRIMARY_READINGS} readings "
+                                    f"in all: its XYZ is a column of the matrix and the top of its "
+                                    f"tone curve, and one reading's noise reaches every colour it "
+                                    f"lights ({repeats_s:.0f} s)"), **common)
         white_cost = seconds([Patch("white", _WHITE)])
         since_white = self._since_white_s(journal)
         if since_white >= DRIFT_REFERENCE_INTERVAL_S and elapsed + white_cost + reserve <= budget:
@@ -599,6 +629,30 @@ class AdaptivePlanner:
         return self.validation[:count], (
             f"; {count} of the {requested} asked for: with all of them the session would pass "
             f"{100 * TIME_CAP_SHARE:.0f} % of the paper plan's predicted time")
+
+    @staticmethod
+    def _primary_repeats(records) -> list:
+        """The full-drive primaries still to read for :data:`PRIMARY_READINGS` readings each,
+        red, green, blue in turn."""
+        out = []
+        for repeat in range(PRIMARY_READINGS):
+            for c, kind in enumerate(_RAMP_KINDS):
+                rgb = [0, 0, 0]
+                rgb[c] = 255
+                if sum(tuple(r.rgb) == tuple(rgb) for r in records) + sum(
+                        p.rgb == tuple(rgb) for p in out) <= repeat:
+                    out.append(Patch(kind, tuple(rgb)))
+        return out
+
+    def _repeats_fit(self, seconds, elapsed: float, paper_s) -> bool:
+        """Whether a session that has measured ``elapsed`` seconds (the core and the primaries'
+        readings) still holds the fewest validation colours and a last white within the user's
+        budget or the time cap."""
+        fewest = list(self.validation[:min(MIN_VALIDATION, self.settings.validation)])
+        end = elapsed + seconds(fewest + [Patch("white", _WHITE)])
+        if self.settings.budget_min is not None:
+            return end <= 60.0 * float(self.settings.budget_min)
+        return paper_s is None or end <= TIME_CAP_SHARE * paper_s
 
     @staticmethod
     def _since_white_s(journal: Journal) -> float:
