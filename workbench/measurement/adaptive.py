@@ -5,12 +5,12 @@ small core (:func:`adaptive_core_plan`: a white, the black, each primary at
 full drive, :data:`CORE_LEVELS` per channel, the greys :data:`CORE_GREYS`,
 and a white), then asks :class:`AdaptivePlanner` after each measurement what
 to measure next. Its first decision reads each primary again, up to
-:data:`PRIMARY_READINGS` readings, where the time cap leaves room for them. Each decision is a deterministic function of the journal's
-measurements and the seed, and is journaled (a ``decision`` record, fsynced
-before its patch is shown) with its reason, e.g. ``"blue tone curve between
-DAC 32 and 64: predicted held-out ΔE00 0.310 → 0.270 for 6 s"``; a run
-resumed after a crash reads the same measurements and makes the same
-decisions.
+:data:`PRIMARY_READINGS` readings, where the time cap leaves room for them.
+Each decision is a deterministic function of the journal's measurements and
+the seed, and is journaled (a ``decision`` record, fsynced before its patch
+is shown) with its reason, e.g. ``"blue tone curve between DAC 32 and 64:
+predicted held-out ΔE00 0.310 → 0.270 for 6 s"``; a run resumed after a
+crash reads the same measurements and makes the same decisions.
 
 How it chooses (each decision):
 
@@ -34,9 +34,9 @@ How it chooses (each decision):
    ``MEAS,1`` announced and the seconds each patch took in this session,
    against luminance; the candidate's luminance as the surrogate predicts it).
 5. The candidate with the largest predicted reduction per second is chosen,
-   unless the primaries' readings are due (the first decision) or a drift reference is: a white once
-   :data:`DRIFT_REFERENCE_INTERVAL_S` of session time have passed since the
-   last one (by elapsed time, not by patch count).
+   unless the primaries' readings are due (the first decision) or a drift
+   reference is: a white once :data:`DRIFT_REFERENCE_INTERVAL_S` of session
+   time have passed since the last one (by elapsed time, not by patch count).
 
 It stops when the best candidate's predicted improvement falls below
 :data:`FLOOR_DE00_PER_MIN` ΔE00 per minute, when the predicted held-out ΔE00
@@ -69,8 +69,9 @@ from workbench.measurement.patch_cost import PatchCostModel, fit_patch_cost
 from workbench.measurement.plans import MeasurementPlan, Patch, measurement_plan_paper
 from workbench.measurement.planning_model import PlanningModel, PlanningRows, planning_colours
 
-__all__ = ["ADAPTIVE_PLAN", "CORE_LEVELS", "PRIMARY_READINGS", "CORE_GREYS", "DRIFT_REFERENCE_INTERVAL_S",
-           "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "MIN_VALIDATION", "PAPER_SHARE", "TIME_CAP_SHARE",
+__all__ = ["ADAPTIVE_PLAN", "CORE_LEVELS", "PRIMARY_READINGS", "CORE_GREYS",
+           "DRIFT_REFERENCE_INTERVAL_S", "FLOOR_DE00_PER_MIN", "DEFAULT_VALIDATION", "MIN_VALIDATION",
+           "PAPER_SHARE", "TIME_CAP_SHARE",
            "MIN_ADAPTIVE_S", "CHECKPOINT_GROWTH", "validation_count",
            "SWEEP_STEP", "GREY_STEP", "MIXTURE_CUBE", "AdaptiveSettings", "Decision", "PlanState",
            "AdaptivePlanner", "adaptive_core_plan", "paper_luminance", "plan_state", "replay_decisions",
@@ -489,9 +490,10 @@ class AdaptivePlanner:
         if self.settings.budget_min is None and not decisions:
             paper = np.array([p.rgb for p in measurement_plan_paper(self.settings.seed).patches], dtype=float)
             paper_s = float(cost.seconds(paper_luminance(model, paper)).sum())
-        repeats = self._primary_repeats(records)
+        # the primaries' further readings: at the first decision, where the cap leaves room
+        repeats = self._primary_repeats(records) if not decisions else []
         repeats_s = seconds(repeats)
-        if repeats and not decisions and not self._repeats_fit(seconds, elapsed + repeats_s, paper_s):
+        if repeats and not self._repeats_fit(seconds, elapsed + repeats_s, paper_s):
             repeats, repeats_s = [], 0.0
         validation, fewer = self._validation(decisions, seconds, elapsed + repeats_s, paper_s)
         reserve = seconds(list(validation) + [Patch("white", _WHITE)])
@@ -646,13 +648,13 @@ class AdaptivePlanner:
 
     def _repeats_fit(self, seconds, elapsed: float, paper_s) -> bool:
         """Whether a session that has measured ``elapsed`` seconds (the core and the primaries'
-        readings) still holds the fewest validation colours and a last white within the user's
-        budget or the time cap."""
+        readings) still holds the fewest validation colours and a last white within the time
+        cap (:data:`TIME_CAP_SHARE`; with ``--budget-min`` the budget decides, in
+        :meth:`decide`)."""
+        if paper_s is None:
+            return True
         fewest = list(self.validation[:min(MIN_VALIDATION, self.settings.validation)])
-        end = elapsed + seconds(fewest + [Patch("white", _WHITE)])
-        if self.settings.budget_min is not None:
-            return end <= 60.0 * float(self.settings.budget_min)
-        return paper_s is None or end <= TIME_CAP_SHARE * paper_s
+        return elapsed + seconds(fewest + [Patch("white", _WHITE)]) <= TIME_CAP_SHARE * paper_s
 
     @staticmethod
     def _since_white_s(journal: Journal) -> float:
