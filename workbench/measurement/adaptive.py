@@ -59,6 +59,7 @@ instrument), ΔE00 in CIELAB relative to the measured white, DAC 0..255.
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -177,10 +178,15 @@ def validation_count(requested: int, elapsed_s: float, white_s: float, costs_s, 
     measured), ``paper_s`` the ``paper`` plan's predicted time. The most that keep the session
     within the cap, never fewer than :data:`MIN_VALIDATION` (or ``requested``, if fewer).
     """
-    costs = np.asarray(costs_s, dtype=float)[:requested]
-    fits = elapsed_s + white_s + np.concatenate([[0.0], np.cumsum(costs)]) <= TIME_CAP_SHARE * paper_s
-    most = int(np.flatnonzero(fits).max()) if fits.any() else 0
+    most = _within_cap(elapsed_s, white_s, np.asarray(costs_s, dtype=float)[:requested], paper_s)
     return int(max(most, min(MIN_VALIDATION, requested)))
+
+
+def _within_cap(elapsed_s: float, white_s: float, costs_s, paper_s: float) -> int:
+    """How many of the colours costing ``costs_s`` (in order) the session, ``elapsed_s`` so far and
+    a last white to come, measures within the time cap (0 where none fit)."""
+    fits = elapsed_s + white_s + np.concatenate([[0.0], np.cumsum(costs_s)]) <= TIME_CAP_SHARE * paper_s
+    return int(np.flatnonzero(fits).max()) if fits.any() else 0
 
 
 def adaptive_core_plan(seed: int) -> MeasurementPlan:
@@ -636,15 +642,11 @@ class AdaptivePlanner:
     def _primary_repeats(records) -> list:
         """The full-drive primaries still to read for :data:`PRIMARY_READINGS` readings each,
         red, green, blue in turn."""
-        out = []
-        for repeat in range(PRIMARY_READINGS):
-            for c, kind in enumerate(_RAMP_KINDS):
-                rgb = [0, 0, 0]
-                rgb[c] = 255
-                if sum(tuple(r.rgb) == tuple(rgb) for r in records) + sum(
-                        p.rgb == tuple(rgb) for p in out) <= repeat:
-                    out.append(Patch(kind, tuple(rgb)))
-        return out
+        readings = Counter(tuple(r.rgb) for r in records)
+        primaries = [(kind, tuple(255 if i == c else 0 for i in range(3)))
+                     for c, kind in enumerate(_RAMP_KINDS)]
+        return [Patch(kind, rgb) for repeat in range(PRIMARY_READINGS) for kind, rgb in primaries
+                if readings[rgb] <= repeat]
 
     def _repeats_fit(self, seconds, elapsed: float, paper_s) -> bool:
         """Whether a session that has measured ``elapsed`` seconds (the core and the primaries'
@@ -653,8 +655,9 @@ class AdaptivePlanner:
         :meth:`decide`)."""
         if paper_s is None:
             return True
-        fewest = list(self.validation[:min(MIN_VALIDATION, self.settings.validation)])
-        return elapsed + seconds(fewest + [Patch("white", _WHITE)]) <= TIME_CAP_SHARE * paper_s
+        fewest = self.validation[:min(MIN_VALIDATION, self.settings.validation)]
+        costs = [seconds([p]) for p in fewest]
+        return _within_cap(elapsed, seconds([Patch("white", _WHITE)]), costs, paper_s) == len(fewest)
 
     @staticmethod
     def _since_white_s(journal: Journal) -> float:
