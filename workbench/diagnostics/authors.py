@@ -38,7 +38,7 @@ import numpy as np
 
 from workbench.colorimetry import delta_E2000
 from workbench.display.extended import ChannelInteraction, ExtendedDisplay
-from workbench.display.tone_curves import fit_tone_curve
+from workbench.display.tone_curves import along_power_segments, fit_tone_curve
 from workbench.diagnostics.peer_score import PeerScore, peer_score
 from workbench.errors import InputError
 from workbench.session import Session
@@ -146,7 +146,7 @@ def fit_grey_ramp_linearisation(session: Session) -> GreyRampLinearisation:
 
 
 def grey_ramp_model(session: Session, white: np.ndarray | None = None,
-                    with_sweeps: bool = False) -> ExtendedDisplay:
+                    with_sweeps: bool = False, power_segments: bool = False) -> ExtendedDisplay:
     """The authors' method as an exportable display model; ``with_sweeps``: its extension.
 
     Each channel's ``ρ_c`` is normalized by its value at full drive (so the
@@ -164,6 +164,11 @@ def grey_ramp_model(session: Session, white: np.ndarray | None = None,
     :data:`MIN_MIXTURES_FOR_EXPONENT`, else :data:`GREYNESS_EXPONENT`). Where a
     channel's sweep and its grey-ramp curve agree the correction is 1 and the
     model is the authors'.
+
+    ``power_segments``: each channel's curve follows the power law through each two
+    consecutive greys instead of the straight line
+    (:func:`~workbench.display.tone_curves.along_power_segments`; where the model choice asks
+    for it: :func:`~workbench.diagnostics.model_choice.fit_candidate`).
 
     Components: ``black-offset`` (the method always has the black),
     ``grey-ramp-linearisation`` and, with the sweeps, ``channel-interaction``.
@@ -183,6 +188,8 @@ def grey_ramp_model(session: Session, white: np.ndarray | None = None,
     inner = (p.drive > 0) & (p.drive < 1)
     tone = tuple(fit_tone_curve(p.drive[inner], p.radiometric[inner, c] / top[c], "linear")
                  for c in range(3))
+    if power_segments:
+        tone = tuple(along_power_segments(curve) for curve in tone)
     white = p.black + full.sum(axis=1) if white is None else np.asarray(white, dtype=float)
     interaction = _axis_ratio(session, p, tone) if with_sweeps else None
     components = ("black-offset", GREY_RAMP_COMPONENT) + (
