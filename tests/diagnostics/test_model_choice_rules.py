@@ -262,31 +262,34 @@ def test_sparse_sweeps_are_five_to_twenty_five_levels_a_channel(levels, sparse):
     assert model_choice.has_sparse_sweep(SimpleNamespace(sweeps=sweeps)) is sparse
 
 
-@pytest.mark.parametrize("mixtures, terms", [(0, ()), (40, ()), (0, ("channel-interaction",))])
-def test_without_mixtures_the_greys_decide_a_tie_with_the_extension(given_errors, mixtures, terms):
+@pytest.mark.parametrize("mixtures", [0, 40])
+def test_without_mixtures_the_greys_decide_a_tie_with_the_extension(given_errors, mixtures):
     # the extension predicts the sweeps better, the sweep correction the greys: together within
-    # noise; with no mixtures among the fit rows the greys (several channels lit) decide, unless
-    # the extension holds the interaction's own term: a flexible candidate must then win beyond
-    # noise, and a tie on the greys is not that (an adaptive session of a chromatic crosstalk went
-    # to the grey ramp so, 0.084 -> 0.373 mean ΔE00 on hidden colours)
+    # noise; with no mixtures among the fit rows the greys (several channels lit) decide
     rng = np.random.default_rng(9)
     counts = (30, 20, 4, mixtures)
     extension = _errors(rng, 0.30, 0.50, 0.30, 0.40, counts)
     extension = (extension[0] + 0.08 * rng.standard_normal(extension[0].size), extension[1])
     given_errors["grey-ramp"] = _errors(rng, 0.45, 0.52, 0.30, 0.45, counts)
     given_errors["grey-ramp+sweeps"] = _errors(rng, 0.33, 0.46, 0.30, 0.40, counts)
-    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
-                                       found=terms, extension_terms=terms)
-    if mixtures or terms:  # mixtures to tell, or the interaction's own term: the extension stays
-        assert choice.chosen == "extension", choice.reason
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False)
+    if mixtures:  # mixtures to tell: a tie keeps the extension
+        assert choice.chosen == "extension"
     else:
         assert choice.chosen == "grey-ramp+sweeps"
         assert "the greys better" in choice.reason
 
 
-@pytest.mark.parametrize("z, taken", [(0.5, False), (1.5, True)])
-def test_the_greys_break_a_tie_by_one_standard_error(given_errors, z, taken):
-    # no mixtures; overall within noise; the greys favour the grey ramp by z standard errors
+@pytest.mark.parametrize("z, terms, taken", [(0.5, (), False), (1.5, (), True),
+                                             (1.5, ("channel-interaction",), False),
+                                             (2.5, ("channel-interaction",), True)])
+def test_the_greys_break_a_tie_by_one_standard_error(given_errors, z, terms, taken):
+    # no mixtures; overall within noise; the greys favour the grey ramp by z standard errors:
+    # one breaks a tie, but against the extension with the interaction's own term, which a
+    # flexible candidate must beat beyond noise, the greys must favour it beyond noise too (an
+    # adaptive session of a chromatic crosstalk went to the grey ramp at 1.2 standard errors,
+    # 0.084 -> 0.373 mean ΔE00 on hidden colours; a real Surface Pro 3 chart, at 2.4, is the
+    # grey ramp's: 1.41 against the extension's 1.60 on its held-out mixtures)
     rng = np.random.default_rng(12)
     counts = (30, 40, 4, 0)
     extension = _errors(rng, 0.30, 0.50, 0.30, 0.0, counts)
@@ -299,6 +302,12 @@ def test_the_greys_break_a_tie_by_one_standard_error(given_errors, z, taken):
     standard_error = model_choice.paired_gain(model_choice._greys_only(extension),
                                               model_choice._greys_only(candidate))[1]
     candidate[0][greys] -= z * standard_error
+    # the sweeps scatter about the extension's errors, so that overall it stays within noise
+    scatter = 0.4 * rng.standard_normal(30)
+    candidate[0][candidate[1] == 0] += scatter - scatter.mean()
     given_errors["grey-ramp+sweeps"] = candidate
-    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False)
+    gain, overall = model_choice.paired_gain(extension, candidate)
+    assert gain < model_choice.CV_Z * overall
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
+                                       found=terms, extension_terms=terms)
     assert (choice.chosen == "grey-ramp+sweeps") is taken, choice.reason

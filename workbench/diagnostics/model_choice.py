@@ -401,11 +401,14 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     tone curves (:func:`~workbench.display.tone_curves.smoothed_points`) predicted
     the sweeps of a real LCD chart with no mixtures among its fit rows (87 greys) far
     better than the grey ramp did, won the choice by 0.001, and scored 0.38 ΔE00 on
-    its 434 held-out mixtures where the sweep correction scored 0.31. The greys do not break
-    a tie against an extension with the interaction's own term, which a grey-ramp candidate
-    must beat beyond noise (above): an adaptive session of a chromatic crosstalk went to the
-    grey ramp on such a tie (0.318 ± 0.165, the greys 0.211 ± 0.182) and scored 0.373 ΔE00 on
-    hidden colours where the extension scores 0.084.
+    its 434 held-out mixtures where the sweep correction scored 0.31. Against an extension
+    with the interaction's own term, which a grey-ramp candidate must beat beyond noise
+    (above), the greys break the tie only where they favour the candidate beyond noise too
+    (:data:`~workbench.diagnostics.cross_validation.CV_Z` standard errors): an adaptive
+    session of a chromatic crosstalk went to the grey ramp on a tie (0.318 ± 0.165, the greys
+    0.211 ± 0.182) and scored 0.373 ΔE00 on hidden colours where the extension scores 0.084;
+    a real Surface Pro 3 chart ties alike (0.999 ± 0.556) with the greys beyond noise (0.152 ±
+    0.064), and its grey ramp scores 1.41 on the held-out mixtures, the extension 1.60.
     """
     def score(errors):
         return float("inf") if errors is None else group_mean(*errors)
@@ -474,8 +477,9 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         greys = paired_gain(_greys_only(chosen_errors), _greys_only(errors))
         if (not gain > needed and chosen == "extension" and name in GREY_RAMP_CANDIDATES
                 and np.isfinite(scores[name]) and mixtures[0] is None
-                and gain > -CV_Z * standard_error and greys[0] > GREYS_TIE_Z * greys[1]
-                and not others[0] < -CV_Z * others[1] and not physical):
+                and gain > -CV_Z * standard_error
+                and greys[0] > (CV_Z if physical else GREYS_TIE_Z) * greys[1]
+                and not others[0] < -CV_Z * others[1]):
             # no mixtures among the fit rows: within noise overall, the greys (the rows that
             # light several channels, as a validation colour does), beyond noise, decide
             # against the extension
