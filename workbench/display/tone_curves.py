@@ -335,7 +335,7 @@ def along_power_segments(curve: LinearCurve, grid: int = POWER_SEGMENT_GRID) -> 
     The stretch from black to the first point, and a flat stretch, stay straight lines.
 
     Returns a :class:`LinearCurve` through the curve's points and the ``grid`` drives between
-    them, so the profile and the VR runtimes read it as any ``linear`` curve.
+    them, so a profile stores and reads it as any ``linear`` curve.
     """
     d = np.asarray(curve.drive_points, dtype=float)
     L = np.asarray(curve.output_points, dtype=float)
