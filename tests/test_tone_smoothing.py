@@ -147,7 +147,7 @@ def test_power_segments_pass_through_the_points_and_follow_a_power_law_between_t
     d = np.array([8, 16, 24, 32, 40, 48, 64, 80, 96, 128, 160, 192, 240]) / 255.0
     chords = LinearCurve(tuple(np.r_[0.0, d, 1.0]), tuple(np.r_[0.0, d, 1.0] ** 2.2))
     bent = tone_curves.along_power_segments(chords)
-    assert bent.form == "linear"  # the profile and the VR runtimes read it as any linear curve
+    assert bent.form == "linear"  # a profile stores and reads it as any linear curve
     assert np.all(np.diff(bent.drive_points) > 1e-6) and np.all(np.diff(bent.output_points) >= 0)
     np.testing.assert_allclose(bent.forward(d), d ** 2.2, rtol=1e-12)
     x = np.linspace(8.0, 255.0, 400) / 255.0
