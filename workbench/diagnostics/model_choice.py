@@ -135,17 +135,7 @@ NOISE_TESTED_CANDIDATES = ("grey-ramp+sweeps",)
 :data:`~workbench.diagnostics.cross_validation.CV_Z` paired standard errors, not only lower its
 cross-validated error: the sweep correction interpolates the sweep rows (which cross-validation
 scores) and on a clean display buys that with held-out accuracy. The authors' method itself
-needs only to predict better: it is the reference no exported profile may lose to.
-
-Where ``channel-interaction`` was found, lowering the error is enough (:func:`choose_model`),
-but only where the fit rows hold :data:`MIN_MIXTURES` mixtures: without them the correction's
-gain is all on the sweep rows it interpolates, and no row tells whether it reaches the colours
-off both axes. On the seed authors' plan (no mixtures among its fit rows) a warm-up during the
-sweeps was found non-additive (the sweeps, dimmer early, fell short of the white) and the
-correction replaced the grey ramp on a gain of 0.004 ± 0.003: 0.175 mean ΔE00 on hidden colours,
-where the grey ramp scores 0.156 and the authors' method 0.159. Beyond noise there, three
-sessions of the peer bench got better by more than 0.01 and none worse; its interactions (a
-drive crosstalk, a power limit, a knee) beat the grey ramp by 3.8 standard errors or more."""
+needs only to predict better: it is the reference no exported profile may lose to."""
 
 
 WHITE_GROUP = 2
@@ -394,11 +384,10 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     that interpolates the fit rows a little better than noise allows costs
     held-out accuracy. Where ``channel-interaction`` was found the display is
     not additive, the correction answers it, and lowering the error is
-    enough where the fit rows hold :data:`MIN_MIXTURES` mixtures (without them
-    its gain is on the sweeps it interpolates alone), unless the model it would
-    replace is the extension with the interaction's own term: a physical form
-    against a flexible one, the flexible one must win beyond noise (an adaptive
-    session of a chromatic crosstalk, 19 mixtures among its fit rows, took the sweep correction at 0.25 ± 0.18 and
+    enough, unless the model it would replace is the extension with the
+    interaction's own term: a physical form against a flexible one, the flexible
+    one must win beyond noise (an adaptive session of a chromatic crosstalk,
+    19 mixtures among its fit rows, took the sweep correction at 0.25 ± 0.18 and
     scored 0.18 ΔE00 on hidden colours where the extension scored 0.11). A
     grey-ramp candidate replaces the model of an identified cause
     (``power-limit``) only beyond noise, and beyond noise on the rows other than
@@ -467,9 +456,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         # grey-ramp candidate against an extension that models the interaction itself, and any
         # flexible candidate to replace the model of an identified cause
         physical = chosen == "extension" and "channel-interaction" in extension_terms
-        noise_tested = ((name in NOISE_TESTED_CANDIDATES
-                         and ("channel-interaction" not in found
-                              or _mixtures_only(chosen_errors) is None))
+        noise_tested = ((name in NOISE_TESTED_CANDIDATES and "channel-interaction" not in found)
                         or (name in GREY_RAMP_CANDIDATES and physical)
                         or (name == "grey-ramp" and apart and chosen in PAPERS_MODELS)
                         or (chosen in IDENTIFIED_CANDIDATES and name != chosen)
