@@ -299,8 +299,9 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
                                            f"{error:.3f} ({gain / max(standard_error, 1e-12):.1f} "
                                            "standard errors)")
     record["extension_cv_mean_dE00"] = error
-    # a drift kept for the settled state by TIMED_DRIFT_Z: the baseline, fitted to the
-    # uncorrected rows, must beat its extension beyond noise, as the extension without it did
+    # a drift kept for the settled state (TIMED_DRIFT_Z): the baseline, fitted to the
+    # uncorrected rows, must beat its extension beyond noise, as the extension without the
+    # drift had to
     settled = ("temporal-drift" in current and context.time_basis == "time"
                and drift_z is not None and drift_z >= TIMED_DRIFT_MIN_Z)
     gain, standard_error = paired_gain(base, errors)
