@@ -261,9 +261,15 @@ def coarse_grey_ramp(context: DiagnosisContext) -> bool:
     half of them and needs :data:`~workbench.diagnostics.authors.MIN_GREYS` there: with five
     levels one fold left it two, the fit failed and its cross-validation was ``inf``.
     """
+    return _coarse_greys(context, 2 * MIN_GREYS)
+
+
+def _coarse_greys(context: DiagnosisContext, fewest: int) -> bool:
+    """Whether the fit rows hold ``fewest`` grey levels or more, :data:`COARSE_GREY_STEP` DAC
+    apart or more (median)."""
     rgb = context.raw.rgb
     levels = np.unique(rgb[partial_greys(rgb), 0])
-    return (levels.size >= 2 * MIN_GREYS
+    return (levels.size >= max(fewest, 2)
             and float(np.median(np.diff(levels))) >= COARSE_GREY_STEP)
 
 
@@ -311,11 +317,7 @@ def bends_between_greys(context: DiagnosisContext) -> bool:
     Decided on the rows given, so a fold's training rows decide for the fold: a fine ramp (a grey
     every 5 DAC) that a fold thins stays fine, and the two folds of a coarse ramp's greys scored
     apart leave it coarse."""
-    if has_sparse_sweep(context):
-        return True
-    rgb = context.raw.rgb
-    levels = np.unique(rgb[partial_greys(rgb), 0])
-    return levels.size >= 2 and float(np.median(np.diff(levels))) >= COARSE_GREY_STEP
+    return has_sparse_sweep(context) or _coarse_greys(context, 2)
 
 
 @dataclass(frozen=True)
