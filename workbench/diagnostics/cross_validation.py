@@ -267,14 +267,17 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
     error = float("inf") if errors is None else group_mean(*errors)
     record["steps"].append({"terms": list(current), "cv_mean_dE00": error})
     order = sorted(found, key=lambda e: (impacts or {}).get(e, 0.0))
+    # a drift found on measurement times far beyond noise: its correction to the settled state
+    # is kept unless it predicts worse beyond noise (TIMED_DRIFT_Z)
+    timed_drift = (context.time_basis == "time" and drift_z is not None
+                   and drift_z >= TIMED_DRIFT_MIN_Z)
     for effect in order:
         trial = [e for e in current if e != effect]
         trial_errors = cross_validated_errors(context, trial, baseline, tone_forms)
         trial_error = float("inf") if trial_errors is None else group_mean(*trial_errors)
         gain, standard_error = paired_gain(trial_errors, errors)
         needed = CV_Z * standard_error if effect in NOISE_TESTED_TERMS else 0.0
-        if (effect == "temporal-drift" and context.time_basis == "time"
-                and drift_z is not None and drift_z >= TIMED_DRIFT_MIN_Z):
+        if effect == "temporal-drift" and timed_drift:
             needed = -TIMED_DRIFT_Z * standard_error  # the settled state: kept unless worse
         if not gain > needed:
             record["by_effect"][effect] = (
@@ -299,11 +302,9 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
                                            f"{error:.3f} ({gain / max(standard_error, 1e-12):.1f} "
                                            "standard errors)")
     record["extension_cv_mean_dE00"] = error
-    # a drift kept for the settled state (TIMED_DRIFT_Z): the baseline, fitted to the
-    # uncorrected rows, must beat its extension beyond noise, as the extension without the
-    # drift had to
-    settled = ("temporal-drift" in current and context.time_basis == "time"
-               and drift_z is not None and drift_z >= TIMED_DRIFT_MIN_Z)
+    # a drift kept for the settled state: the baseline, fitted to the uncorrected rows, must
+    # beat its extension beyond noise, as the extension without the drift had to
+    settled = "temporal-drift" in current and timed_drift
     gain, standard_error = paired_gain(base, errors)
     record["use_extension"] = bool(current) and (gain > -TIMED_DRIFT_Z * standard_error
                                                  if settled else error < base_error)
