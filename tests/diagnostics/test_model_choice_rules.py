@@ -86,6 +86,50 @@ def test_a_grey_ramp_gain_at_the_whites_alone_needs_the_other_rows_within_noise(
         assert "predicts the other rows worse beyond noise" in choice.reason
 
 
+@pytest.mark.parametrize("terms, others_worse_by, taken", [
+    (("channel-interaction",), 0.02, False), (("channel-interaction",), -0.02, True),
+    ((), 0.02, True)])
+def test_against_the_interactions_own_term_a_gain_at_the_whites_needs_the_other_rows_no_worse(
+        given_errors, terms, others_worse_by, taken):
+    """A grey-ramp candidate's gain at the whites (its ramp's top) with the other rows a little
+    worse, within noise: taken against an extension without the interaction's term, refused
+    against one with it; with the other rows a little better it is taken there too."""
+    rng = np.random.default_rng(21)
+    extension = _errors(rng, 0.30, 0.30, 0.90, 0.0)
+    worse = 0.30 + others_worse_by + 0.1 * rng.standard_normal(50)  # within noise either way
+    given_errors["grey-ramp"] = (np.concatenate([worse, extension[0][50:] - 0.85]), extension[1])
+    given_errors["grey-ramp+sweeps"] = (given_errors["grey-ramp"][0] + 0.01, extension[1])
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
+                                       found=("channel-interaction",), extension_terms=terms)
+    assert (choice.chosen == "grey-ramp") is taken, choice.reason
+    if not taken:
+        assert choice.chosen == "extension"
+        assert "with the interaction's own term: its gain" in choice.reason
+
+
+@pytest.mark.parametrize("gain, drift, taken", [(0.0005, False, False), (0.03, False, True),
+                                                (0.0005, True, True)])
+def test_between_sparse_sweeps_a_coarse_grey_ramp_must_beat_the_extension_beyond_noise(
+        given_errors, gain, drift, taken):
+    """Sparse sweeps and a coarse ramp: the extension is scored with the greys apart too, and the
+    grey ramp must beat that beyond noise; with a drift in the model lowering the error is
+    enough, as before."""
+    given_errors["coarse"] = True
+    rng = np.random.default_rng(22)
+    common = _errors(rng, 0.50, 0.50, 0.30, 0.0)  # the extension in the common folds
+    apart = _errors(rng, 0.40, 0.40, 0.30, 0.0)
+    scatter = 0.01 * rng.standard_normal(apart[0].size)
+    given_errors["grey-ramp"] = (apart[0] - gain + scatter, apart[1])
+    given_errors["grey-ramp+sweeps"] = (common[0] + 0.1, common[1])
+    asked = []
+    choice = model_choice.choose_model(object(), "extension", common, common, drift=drift,
+                                       current_errors_apart=lambda: asked.append(1) or apart)
+    assert (choice.chosen == "grey-ramp") is taken, choice.reason
+    assert bool(asked) is not drift
+    if not taken:
+        assert "both scored with the greys apart" in choice.reason
+
+
 @pytest.mark.parametrize("terms, taken", [(("channel-interaction",), False), ((), True)])
 def test_the_sweep_correction_must_beat_noise_against_the_interactions_own_term(
         given_errors, terms, taken):

@@ -186,7 +186,8 @@ def cross_validated_errors_of(context: DiagnosisContext, fit_model, drift: bool 
 
 
 def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, tone_forms=None,
-                           folds: int = FOLDS) -> tuple[np.ndarray, np.ndarray] | None:
+                           folds: int = FOLDS,
+                           greys_apart: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
     """Per-row ΔE00 of the fit rows predicted by models fitted without them, and each row's group.
 
     ``effects`` None: the baseline. Otherwise the extension with the terms of
@@ -194,11 +195,11 @@ def cross_validated_errors(context: DiagnosisContext, effects, baseline=None, to
     """
     if effects is None:
         return cross_validated_errors_of(context, lambda fold_context, fold_baseline: fold_baseline,
-                                         folds=folds)
+                                         folds=folds, greys_apart=greys_apart)
     return cross_validated_errors_of(
         context, lambda fold_context, fold_baseline: fit_extended(
             fold_context, effects, fold_baseline if baseline is not None else None, tone_forms),
-        drift="temporal-drift" in effects, folds=folds)
+        drift="temporal-drift" in effects, folds=folds, greys_apart=greys_apart)
 
 
 def group_mean(values: np.ndarray, groups: np.ndarray) -> float:

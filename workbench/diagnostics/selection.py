@@ -457,7 +457,10 @@ def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_
                         baseline_errors, drift="temporal-drift" in terms and extension_used,
                         power_limit=power_limit, found=found,
                         power_limit_offered=power_limit_offered,
-                        extension_terms=tuple(terms) if extension_used else ())
+                        extension_terms=tuple(terms) if extension_used else (),
+                        current_errors_apart=(lambda: cross_validated_errors(
+                            context, terms, baseline, tone_forms, greys_apart=True))
+                        if extension_used else None)
 
 
 def _answered_by(candidate: str) -> set:
