@@ -422,9 +422,9 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     grey ramp copies each single-reading grey's noise into every colour: on the adaptive
     sessions of ``bench plans`` it had taken a shoulder on 0.045 ± 0.018 (0.023 ± 0.016 with
     the greys apart for both) and scored 0.090 ΔE00 on hidden colours where the extension
-    scores 0.067. Along dense sweeps (``paper+greys``) the same rule moved 20 sessions of the
-    peer bench's seeds 30000 and 31000 to the extension for the worse and 4 for the better:
-    there lowering the extension's error is enough, as before.
+    scores 0.067. Along dense sweeps (``paper+greys``), and with drift sessions too, the same
+    rule moved 20 sessions of the peer bench's seeds 30000 and 31000 to the extension for the
+    worse and 4 for the better: there lowering the extension's error is enough, as before.
     Against an extension with the interaction's own term, a grey-ramp candidate must win
     beyond noise.
     Where the fit rows hold fewer than :data:`MIN_MIXTURES` mixtures, no grey-ramp
