@@ -2,9 +2,9 @@
 
 Between sparse sweeps (the adaptive plan's ten levels a channel) the two meet on the same folds
 and the grey ramp must win beyond noise; against an extension with the interaction's own term a
-gain at the white references counts only with the other rows predicted no worse. Displays of the independent generator,
-measured through the CS-2000 emulator (the adaptive plan) or generated (``paper+greys``).
-The paper plan's hidden-colour scores quoted are ``bench plans``'.
+gain at the white references counts only with the other rows predicted no worse. Displays of
+the independent generator, measured through the CS-2000 emulator (the adaptive plan) or
+generated (``paper+greys``); the paper plan's hidden-colour scores quoted are ``bench plans``'.
 """
 
 from __future__ import annotations

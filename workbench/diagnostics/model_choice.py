@@ -552,6 +552,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
             continue
         if gain > needed and np.isfinite(scores[name]):
             notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
+                         + (", both scored with the greys apart" if versus_extension else "")
                          if gain > 0 else
                          f"{name}, the identified cause, predicts no worse beyond noise than "
                          f"the {chosen} ({gain:.3f} ± {standard_error:.3f})")
