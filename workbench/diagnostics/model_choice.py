@@ -479,11 +479,12 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         scores[name] = score(errors)
         # between sparse sweeps the coarse grey ramp meets term selection's extension on the
         # same folds, the greys apart for both, and must beat it beyond noise (Notes)
-        against = (current_errors_apart() if name == "grey-ramp" and apart and chosen == current
-                   == "extension" and has_sparse_sweep(context) and not drift
-                   and current_errors_apart is not None else None)
-        versus_extension = against is not None
-        against = against if versus_extension else chosen_errors
+        apart_errors = (current_errors_apart()
+                        if (name == "grey-ramp" and apart and chosen == current == "extension"
+                            and has_sparse_sweep(context) and not drift
+                            and current_errors_apart is not None) else None)
+        versus_extension = apart_errors is not None
+        against = apart_errors if versus_extension else chosen_errors
         gain, standard_error = paired_gain(against, errors)
         # the sweep correction must beat noise on a display not found non-additive, any
         # grey-ramp candidate against an extension that models the interaction itself, and any
