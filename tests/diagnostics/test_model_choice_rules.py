@@ -355,3 +355,30 @@ def test_the_greys_break_a_tie_by_one_standard_error(given_errors, z, terms, tak
     choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
                                        found=terms, extension_terms=terms)
     assert (choice.chosen == "grey-ramp+sweeps") is taken, choice.reason
+
+
+@pytest.mark.parametrize("mixture_gain, taken", [(0.03, False), (0.08, True)])
+def test_a_coarse_grey_ramp_within_noise_is_taken_on_a_material_gain_on_the_mixtures(
+        given_errors, mixture_gain, taken):
+    """``paper+greys``: the 150 sweep rows favour the paper's power laws, fitted to them, and hold
+    the grey ramp within noise overall; the mixtures (the rows a validation colour is) then decide,
+    beyond noise and by the materiality floor (both gains are many standard errors)."""
+    rng = np.random.default_rng(12)
+    counts = (150, 15, 10, 24)
+    baseline = _errors(rng, 0.25, 0.50, 0.50, 0.25, counts)
+    groups = baseline[1]
+    shift = np.select([groups == 0, groups == 3], [0.03, -mixture_gain], 0.0)
+    scatter = np.where(groups == 3, 0.0, 0.3) * rng.standard_normal(groups.size)
+    given_errors["coarse"] = True
+    given_errors["grey-ramp"] = (baseline[0] + shift + scatter, groups)
+    given_errors["grey-ramp+sweeps"] = (baseline[0] + 0.2, groups)
+    for name in model_choice.WEIGHTED_CANDIDATES:
+        given_errors[name] = (baseline[0] + 0.01, groups)
+    overall = model_choice.paired_gain(baseline, given_errors["grey-ramp"])
+    assert abs(overall[0]) < model_choice.CV_Z * overall[1]  # within noise over all the rows
+    choice = model_choice.choose_model(object(), "baseline", baseline, baseline, drift=False)
+    if taken:
+        assert choice.chosen == "grey-ramp", choice.reason
+        assert "and the 24 mixtures better (0.080" in choice.reason, choice.reason
+    else:  # beyond noise, below the floor: the paper's model stays
+        assert choice.chosen == "baseline", choice.reason

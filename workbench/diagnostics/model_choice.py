@@ -56,6 +56,7 @@ from workbench.diagnostics.detectors import DiagnosisContext
 from workbench.diagnostics.evidence import partial_greys
 from workbench.diagnostics.extension import fit_extended
 from workbench.diagnostics.power_limit import MIN_REFIT_SWEEP_LEVELS, power_limit_model
+from workbench.diagnostics.significance import MATERIALITY_FLOOR_DE00
 from workbench.display import DisplayModel, GammaMatrixDisplay
 from workbench.errors import InputError
 
@@ -168,6 +169,23 @@ MIXTURE_GROUP = 3
 
 MIN_MIXTURES = 10
 """Fit-row mixtures from which the sweep correction must also predict them no worse."""
+
+
+MIXTURE_MATERIALITY_DE00 = MATERIALITY_FLOOR_DE00
+"""Mean ΔE00 by which a coarse grey ramp (:data:`COARSE_GREY_STEP`) must predict the fit rows'
+mixtures better than the paper's model (:data:`PAPERS_MODELS`), beyond noise too, where over all
+the rows it is within noise of it (:func:`choose_model`); the floor a finding's impact must reach
+(:data:`~workbench.diagnostics.significance.MATERIALITY_FLOOR_DE00`). Along ``paper+greys``
+sweeps (24 mixtures among the fit rows) the 150 sweep rows, which the paper's power laws are
+fitted to and the grey ramp is not, held the grey ramp within noise overall on clean displays and
+warm-ups where it predicted the mixtures better by 0.06–0.12 ΔE00 (3–6 standard errors), and the
+paper's model was exported: 0.197, 0.246 and 0.172 mean ΔE00 on hidden colours where the grey ramp
+scores 0.120, 0.081 and 0.122 (the seed authors' method 0.179, 0.178 and 0.158). With no floor,
+beyond noise alone (2 standard errors), 27 clean ``paper+greys`` sessions of the diagnosis suite
+went to the grey ramp, better on hidden colours on 23, and 6 lost to the paper's model on their
+measured validation colours, on mixture gains of 0.014–0.025. With the floor, 4 of the suite
+(none lost) and 5 of the peer bench's ``paper+greys`` sessions (all better on hidden colours)
+went to the grey ramp, at mixture gains of 0.060–0.124; the largest it refused was 0.050."""
 
 
 def _mixtures_only(errors):
@@ -427,6 +445,10 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     worse and 4 for the better: there lowering the extension's error is enough, as before.
     Against an extension with the interaction's own term, a grey-ramp candidate must win
     beyond noise.
+    Scored apart and within noise of the paper's model over all the rows, a coarse
+    ``grey-ramp`` still replaces it where it predicts the fit rows' mixtures better beyond
+    noise and by :data:`MIXTURE_MATERIALITY_DE00`: along dense sweeps the sweep rows, which
+    the paper's power laws are fitted to, weigh a quarter of the score.
     Where the fit rows hold fewer than :data:`MIN_MIXTURES` mixtures, no grey-ramp
     candidate replaces the model of an identified cause at all: its gain is then on the
     greys and sweeps its own tables pass through, and no row tells how either
@@ -463,6 +485,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     if current == "extension":
         scores["extension"] = score(current_errors)
     chosen, chosen_errors = current, current_errors
+    most_like = None  # the rows that broke a tie within noise, where they did
     notes = []
     greys = has_grey_ramp(context)
     names = ((("power-limit",) if power_limit or power_limit_offered else ())
@@ -536,6 +559,19 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                          f"{mixtures[0][0].size} mixtures worse by "
                          f"{-paired_gain(*mixtures)[0]:.3f}")
             continue
+        # a coarse grey ramp held within noise of the paper's model over all the rows may still
+        # predict the mixtures (the rows a validation colour is) better beyond noise, by a
+        # material amount (:data:`MIXTURE_MATERIALITY_DE00`)
+        mixture_gain = paired_gain(*mixtures) if None not in mixtures else (0.0, 0.0)
+        if (not gain > needed and name == "grey-ramp" and apart and chosen in PAPERS_MODELS
+                and np.isfinite(scores[name]) and gain > -CV_Z * standard_error
+                and mixture_gain[0] > max(CV_Z * mixture_gain[1], MIXTURE_MATERIALITY_DE00)):
+            notes.append(f"{name} predicts the fit rows as well as the {chosen} within noise "
+                         f"({gain:.3f} ± {standard_error:.3f}) and the {mixtures[0][0].size} "
+                         f"mixtures better ({mixture_gain[0]:.3f} ± {mixture_gain[1]:.3f}), the "
+                         "rows most like a validation colour")
+            chosen, chosen_errors, most_like = name, errors, "mixtures"
+            continue
         greys = paired_gain(_greys_only(against), _greys_only(errors))
         if (not gain > needed and chosen == "extension" and name in GREY_RAMP_CANDIDATES
                 and np.isfinite(scores[name]) and mixtures[0] is None
@@ -549,7 +585,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                          f"({gain:.3f} ± {standard_error:.3f}) and the greys better "
                          f"({greys[0]:.3f} ± {greys[1]:.3f}); the fit rows hold no mixtures, "
                          "and the greys are the rows most like them")
-            chosen, chosen_errors = name, errors
+            chosen, chosen_errors, most_like = name, errors, "greys"
             continue
         if gain > needed and np.isfinite(scores[name]):
             notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
@@ -577,7 +613,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                                                              else "") + ")")
     elif scores[chosen] > scores.get(current, float("inf")) and chosen not in IDENTIFIED_CANDIDATES:
         reason = (f"{chosen} predicts unseen fit rows as well as the {current} within noise, and "
-                  f"the greys better ({scores[chosen]:.3f} against {scores[current]:.3f} "
+                  f"the {most_like} better ({scores[chosen]:.3f} against {scores[current]:.3f} "
                   f"cross-validated mean ΔE00; {'; '.join(notes)})")
     elif scores[chosen] > scores.get(current, float("inf")):
         others = [note for note in notes if not note.startswith(f"{chosen},")]
