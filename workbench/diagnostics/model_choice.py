@@ -559,33 +559,28 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                          f"{mixtures[0][0].size} mixtures worse by "
                          f"{-paired_gain(*mixtures)[0]:.3f}")
             continue
-        # a coarse grey ramp held within noise of the paper's model over all the rows may still
-        # predict the mixtures (the rows a validation colour is) better beyond noise, by a
-        # material amount (:data:`MIXTURE_MATERIALITY_DE00`)
-        mixture_gain = paired_gain(*mixtures) if None not in mixtures else (0.0, 0.0)
-        if (not gain > needed and name == "grey-ramp" and apart and chosen in PAPERS_MODELS
-                and np.isfinite(scores[name]) and gain > -CV_Z * standard_error
-                and mixture_gain[0] > max(CV_Z * mixture_gain[1], MIXTURE_MATERIALITY_DE00)):
-            notes.append(f"{name} predicts the fit rows as well as the {chosen} within noise "
-                         f"({gain:.3f} ± {standard_error:.3f}) and the {mixtures[0][0].size} "
-                         f"mixtures better ({mixture_gain[0]:.3f} ± {mixture_gain[1]:.3f}), the "
-                         "rows most like a validation colour")
-            chosen, chosen_errors, most_like = name, errors, "mixtures"
-            continue
+        # within noise over all the rows, the rows most like a validation colour may break the
+        # tie: along a coarse grey ramp the mixtures against the paper's model, beyond noise and
+        # by :data:`MIXTURE_MATERIALITY_DE00`; with no mixtures among the fit rows the greys (the
+        # rows that light several channels) against the extension, beyond noise
+        mixture_gain = paired_gain(*mixtures) if None not in mixtures else None
         greys = paired_gain(_greys_only(against), _greys_only(errors))
-        if (not gain > needed and chosen == "extension" and name in GREY_RAMP_CANDIDATES
-                and np.isfinite(scores[name]) and mixtures[0] is None
-                and gain > -CV_Z * standard_error
+        tie_break = None
+        if (name == "grey-ramp" and apart and chosen in PAPERS_MODELS and mixture_gain is not None
+                and mixture_gain[0] > max(CV_Z * mixture_gain[1], MIXTURE_MATERIALITY_DE00)):
+            tie_break = ("mixtures", f"the {mixtures[0][0].size} mixtures", mixture_gain, "")
+        elif (chosen == "extension" and name in GREY_RAMP_CANDIDATES and mixtures[0] is None
                 and greys[0] > (CV_Z if physical else GREYS_TIE_Z) * greys[1]
                 and not others[0] < -CV_Z * others[1]):
-            # no mixtures among the fit rows: within noise overall, the greys (the rows that
-            # light several channels, as a validation colour does), beyond noise, decide
-            # against the extension
-            notes.append(f"{name} predicts the fit rows as well as the extension within noise "
-                         f"({gain:.3f} ± {standard_error:.3f}) and the greys better "
-                         f"({greys[0]:.3f} ± {greys[1]:.3f}); the fit rows hold no mixtures, "
-                         "and the greys are the rows most like them")
-            chosen, chosen_errors, most_like = name, errors, "greys"
+            tie_break = ("greys", "the greys", greys, "; the fit rows hold no mixtures")
+        if (tie_break is not None and not gain > needed and np.isfinite(scores[name])
+                and gain > -CV_Z * standard_error):
+            rows, described, (rows_gain, rows_error), why = tie_break
+            notes.append(f"{name} predicts the fit rows as well as the {chosen} within noise "
+                         f"({gain:.3f} ± {standard_error:.3f}) and {described} better "
+                         f"({rows_gain:.3f} ± {rows_error:.3f}), the rows most like a validation "
+                         f"colour{why}")
+            chosen, chosen_errors, most_like = name, errors, rows
             continue
         if gain > needed and np.isfinite(scores[name]):
             notes.append(f"{name} beats the {chosen} by {gain:.3f} ± {standard_error:.3f}"
