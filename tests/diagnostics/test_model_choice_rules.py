@@ -382,3 +382,21 @@ def test_a_coarse_grey_ramp_within_noise_is_taken_on_a_material_gain_on_the_mixt
         assert "and the 24 mixtures better (0.080" in choice.reason, choice.reason
     else:  # beyond noise, below the floor: the paper's model stays
         assert choice.chosen == "baseline", choice.reason
+
+
+@pytest.mark.parametrize("found, corrected", [((), False), (("channel-interaction",), True)])
+def test_beside_a_drift_the_sweep_correction_needs_a_found_interaction_or_mixtures(
+        given_errors, found, corrected):
+    """Each sweep is measured in its own stretch of the drift: with no mixtures among the fit
+    rows, the sweep correction's gain on the sweeps is taken only beside a found interaction."""
+    rng = np.random.default_rng(14)
+    extension = _errors(rng, 0.40, 0.50, 0.60, 0.0)
+    given_errors["grey-ramp"] = _errors(rng, 0.20, 0.25, 0.50, 0.0)
+    given_errors["grey-ramp+sweeps"] = _errors(rng, 0.15, 0.25, 0.50, 0.0)
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=True,
+                                       found=("temporal-drift",) + found)
+    if corrected:
+        assert choice.chosen == "grey-ramp+sweeps", choice.reason
+    else:
+        assert choice.chosen == "grey-ramp", choice.reason
+        assert "the drift correction's residual" in choice.reason
