@@ -535,6 +535,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                   -CV_Z * standard_error if name in IDENTIFIED_CANDIDATES and power_limit else 0.0)
         others = paired_gain(_without_whites(against), _without_whites(errors))
         mixtures = (_mixtures_only(against), _mixtures_only(errors))
+        mixture_gain = paired_gain(*mixtures) if None not in mixtures else None
         # beside a drift in the model, with no interaction found and no mixtures to tell, the
         # sweep correction's gain on the sweeps is the drift correction's residual (Notes)
         if (name == "grey-ramp+sweeps" and drift and mixtures[0] is None
@@ -575,17 +576,16 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                              f"{others[1]:.3f})")
                 continue
         if (gain > needed and np.isfinite(scores[name]) and name in NOISE_TESTED_CANDIDATES
-                and None not in mixtures and paired_gain(*mixtures)[0] < 0):
+                and mixture_gain is not None and mixture_gain[0] < 0):
             notes.append(f"{name} does not beat the {chosen}: its gain ({gain:.3f}) is on the "
                          f"sweeps and greys it interpolates, and it predicts the "
                          f"{mixtures[0][0].size} mixtures worse by "
-                         f"{-paired_gain(*mixtures)[0]:.3f}")
+                         f"{-mixture_gain[0]:.3f}")
             continue
         # within noise over all the rows, the rows most like a validation colour may break the
         # tie: along a coarse grey ramp the mixtures against the paper's model, beyond noise and
         # by :data:`MIXTURE_MATERIALITY_DE00`; with no mixtures among the fit rows the greys (the
         # rows that light several channels) against the extension, beyond noise
-        mixture_gain = paired_gain(*mixtures) if None not in mixtures else None
         greys = paired_gain(_greys_only(against), _greys_only(errors))
         tie_break = None
         if (name == "grey-ramp" and apart and chosen in PAPERS_MODELS and mixture_gain is not None
