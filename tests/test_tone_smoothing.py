@@ -167,3 +167,49 @@ def test_a_flat_stretch_stays_flat_between_power_segments():
     x = np.linspace(0.2, 0.3, 11)
     np.testing.assert_allclose(bent.forward(x), 0.05)
     assert np.all(np.diff(bent.forward(np.linspace(0.0, 1.0, 1001))) >= 0)
+
+
+def _toe(d):
+    """A toe: nothing below 5 % drive (DAC 12.75), then a power law of what is left, not of the
+    drive as the power segments assume."""
+    return np.clip((np.asarray(d, dtype=float) - 0.05) / 0.95, 0.0, None) ** 1.5
+
+
+def test_sweep_segments_follow_the_channel_s_own_sweep_between_the_greys():
+    d = np.arange(16, 255, 16) / 255.0  # paper+greys: a grey every 16 DAC
+    greys = LinearCurve(tuple(np.r_[0.0, d, 1.0]), tuple(_toe(np.r_[0.0, d, 1.0])))
+    sweep = np.arange(5, 256, 5) / 255.0  # and a sweep point every 5
+    shaped = tone_curves.along_sweep_segments(greys, sweep, _toe(sweep))
+    power = tone_curves.along_power_segments(greys)
+    assert shaped.form == "linear"
+    assert np.all(np.diff(shaped.drive_points) > 0) and np.all(np.diff(shaped.output_points) >= 0)
+    np.testing.assert_allclose(shaped.forward(d), _toe(d), rtol=1e-12)  # through every grey
+    x = np.linspace(16.0, 64.0, 200) / 255.0
+    # between the greys at DAC 16 and 64 the power laws through them miss the toe by up to 30 %
+    # of its output (a power of 3.9 between 16 and 32); the sweep's shape by its chords,
+    # between levels 5 DAC apart, 4 % at most (just above the grey at 16, where the toe bends most)
+    assert np.max(np.abs(power.forward(x) / _toe(x) - 1.0)) > 0.2
+    assert np.max(np.abs(shaped.forward(x) / _toe(x) - 1.0)) < 0.05
+    # below the toe's threshold the sweep reads nothing, and so does the curve
+    np.testing.assert_allclose(shaped.forward(np.array([5.0, 10.0]) / 255.0), 0.0, atol=1e-12)
+
+
+def test_sweep_segments_follow_power_laws_where_the_sweep_is_sparse():
+    # the adaptive plan's core: ten sweep levels a channel, none two inside a stretch between greys
+    d = np.r_[np.arange(8, 49, 8), np.arange(64, 241, 16)] / 255.0
+    greys = LinearCurve(tuple(np.r_[0.0, d, 1.0]), tuple(np.r_[0.0, d, 1.0] ** 2.2))
+    sweep = np.array([32, 64, 96, 128, 160, 192, 208, 224, 236, 246, 255]) / 255.0
+    shaped = tone_curves.along_sweep_segments(greys, sweep, sweep ** 2.4)
+    power = tone_curves.along_power_segments(greys)
+    x = np.linspace(0.0, 1.0, 1001)
+    np.testing.assert_allclose(shaped.forward(x), power.forward(x), rtol=1e-12, atol=1e-15)
+
+
+def test_a_noisy_sweep_keeps_the_curve_monotone():
+    d = np.arange(16, 255, 16) / 255.0
+    greys = LinearCurve(tuple(np.r_[0.0, d, 1.0]), tuple(np.r_[0.0, d, 1.0] ** 2.2))
+    sweep = np.arange(5, 256, 5) / 255.0
+    noisy = sweep ** 2.2 * (1.0 + 0.05 * np.random.default_rng(3).standard_normal(sweep.size))
+    shaped = tone_curves.along_sweep_segments(greys, sweep, noisy)
+    assert np.all(np.diff(shaped.forward(np.linspace(0.0, 1.0, 2001))) >= 0)
+    np.testing.assert_allclose(shaped.forward(d), d ** 2.2, rtol=1e-12)

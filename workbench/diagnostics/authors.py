@@ -38,7 +38,7 @@ import numpy as np
 
 from workbench.colorimetry import delta_E2000
 from workbench.display.extended import ChannelInteraction, ExtendedDisplay
-from workbench.display.tone_curves import along_power_segments, fit_tone_curve
+from workbench.display.tone_curves import along_power_segments, along_sweep_segments, fit_tone_curve
 from workbench.diagnostics.peer_score import PeerScore, peer_score
 from workbench.errors import InputError
 from workbench.session import Session
@@ -146,7 +146,8 @@ def fit_grey_ramp_linearisation(session: Session) -> GreyRampLinearisation:
 
 
 def grey_ramp_model(session: Session, white: np.ndarray | None = None,
-                    with_sweeps: bool = False, power_segments: bool = False) -> ExtendedDisplay:
+                    with_sweeps: bool = False, power_segments: bool = False,
+                    sweep_segments: bool = False) -> ExtendedDisplay:
     """The authors' method as an exportable display model; ``with_sweeps``: its extension.
 
     Each channel's ``ρ_c`` is normalized by its value at full drive (so the
@@ -168,7 +169,10 @@ def grey_ramp_model(session: Session, white: np.ndarray | None = None,
     ``power_segments``: each channel's curve follows the power law through each two
     consecutive greys instead of the straight line
     (:func:`~workbench.display.tone_curves.along_power_segments`; where the model choice asks
-    for it: :func:`~workbench.diagnostics.model_choice.fit_candidate`).
+    for it: :func:`~workbench.diagnostics.model_choice.fit_candidate`); with
+    ``sweep_segments`` too, in the shape of the channel's own sweep (smoothed) where it holds two
+    levels or more inside a stretch
+    (:func:`~workbench.display.tone_curves.along_sweep_segments`).
 
     Components: ``black-offset`` (the method always has the black),
     ``grey-ramp-linearisation`` and, with the sweeps, ``channel-interaction``.
@@ -188,7 +192,10 @@ def grey_ramp_model(session: Session, white: np.ndarray | None = None,
     inner = (p.drive > 0) & (p.drive < 1)
     tone = tuple(fit_tone_curve(p.drive[inner], p.radiometric[inner, c] / top[c], "linear")
                  for c in range(3))
-    if power_segments:
+    if power_segments and sweep_segments:
+        tone = tuple(along_sweep_segments(curve, *_sweep_points(session, p, c))
+                     for c, curve in enumerate(tone))
+    elif power_segments:
         tone = tuple(along_power_segments(curve) for curve in tone)
     white = p.black + full.sum(axis=1) if white is None else np.asarray(white, dtype=float)
     interaction = _axis_ratio(session, p, tone) if with_sweeps else None
@@ -212,6 +219,18 @@ def grey_ramp_model(session: Session, white: np.ndarray | None = None,
     errors = [float(delta_E2000(m.forward(mixtures.rgb), mixtures.XYZ, white).mean())
               for m in candidates]
     return candidates[int(np.argmin(errors))]
+
+
+def _sweep_points(session: Session, points: GreyRampPoints, channel: int) -> np.ndarray:
+    """(2, n): channel ``channel``'s sweep levels (0..1) and its ρ there (mean per level)."""
+    rows = session.without("validation")
+    rgb = rows.rgb
+    own = (rgb[:, channel] > 0) & np.all(np.delete(rgb, channel, axis=1) == 0, axis=1)
+    if not own.any():
+        return np.zeros((2, 0))
+    amount = np.linalg.solve(points.matrix, (rows.XYZ[own] - points.black).T).T[:, channel]
+    levels, means = _mean_by_level(rgb[own, channel] / 255.0, amount[:, None])
+    return np.vstack([levels, means[:, 0]])
 
 
 GREYNESS_EXPONENT = 0.5

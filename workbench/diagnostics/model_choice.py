@@ -311,6 +311,22 @@ def fit_candidate(name: str, context: DiagnosisContext, found=()) -> DisplayMode
     25 better and 18 worse. ``grey-ramp+sweeps`` keeps the straight lines: with power segments
     too, the adaptive plan missed the paper plan's hidden error + 0.02 on 10 of the 100 displays
     of seeds 41001–41004 rather than 8 (a warm-up 0.044 → 0.105).
+
+    Where ``tone-curve-shape`` is among ``found`` and ``channel-interaction`` is not, the bends
+    follow each channel's own sweep (smoothed) wherever it holds two levels or more between
+    two greys (:func:`~workbench.display.tone_curves.along_sweep_segments`): a power law through
+    two greys is the curve between them only where the tone curves are power laws, and a toe
+    that crushes DAC 8 to black rises between the greys at 16 and 32 as none does (seed 35004 of
+    the peer bench: 0.228 mean ΔE00 on hidden colours, the authors' straight lines 0.201; along
+    its sweeps 0.102). Not between sparse sweeps (:func:`has_sparse_sweep`): there a stretch's
+    shape rests on the level or two the adaptive planner added, and drawn so six tone curves of
+    ``bench plans`` changed, two better and four worse (an S-curve 0.074 → 0.089 the most). Not
+    where the channels interact: a channel's sweep then runs at another load than the grey at
+    the same drive (two power limits of the diagnosis suite
+    went 0.148 → 0.391 and 0.206 → 0.794 on their validation colours). Nor on a display whose
+    tone curves were not found bent: on clean displays the sweeps' shape is a power law within
+    their noise (one clean display of the suite lost 0.205 → 0.208 to the paper's model on its
+    validation colours).
     """
     if name not in ALTERNATIVE_CANDIDATES:
         raise InputError(f"unknown candidate {name!r}; use one of "
@@ -324,7 +340,10 @@ def fit_candidate(name: str, context: DiagnosisContext, found=()) -> DisplayMode
     if name == "weighted-gamma+greys":  # the extension with no term: power laws, noise-weighted
         return fit_extended(context, ())
     return grey_ramp_model(context.fit, context.white, with_sweeps=name == "grey-ramp+sweeps",
-                           power_segments=name == "grey-ramp" and bends_between_greys(context))
+                           power_segments=name == "grey-ramp" and bends_between_greys(context),
+                           sweep_segments=("tone-curve-shape" in found
+                                           and "channel-interaction" not in found
+                                           and not has_sparse_sweep(context)))
 
 
 def bends_between_greys(context: DiagnosisContext) -> bool:
