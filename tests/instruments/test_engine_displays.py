@@ -220,11 +220,13 @@ def test_measure_over_value_shot_records_the_patch_the_engine_showed(tmp_path, m
 
 def test_an_engine_that_is_not_there_stops_the_run_and_resume_finishes_it(tmp_path, monkeypatch, capsys):
     port = _free_port()
+    # The Unity convention has no acknowledgement: the settle time is the only wait for the engine to show
+    # a patch, and with 0 s the first reading races the engine's thread on a loaded machine.
     args = ["measure", "--simulate", "--plan-file", _plan_file(tmp_path), "--seed", "1",
-            "--display", f"rgb-text:127.0.0.1:{port}:0", "--out", str(tmp_path / "run")]
+            "--display", f"rgb-text:127.0.0.1:{port}:0.12", "--out", str(tmp_path / "run")]
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert f"cannot send 255,255,255 to the engine at rgb-text:127.0.0.1:{port}:0" in err and "--resume" in err
+    assert f"cannot send 255,255,255 to the engine at rgb-text:127.0.0.1:{port}:0.12" in err and "--resume" in err
     journal = read_journal(tmp_path / "run" / JOURNAL_NAME)
     assert journal.records == () and len(journal.header.plan) == 4  # the header is kept for --resume
     with UnityRgbTextStandin(port=port) as engine:
