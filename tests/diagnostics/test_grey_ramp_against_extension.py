@@ -18,6 +18,8 @@ from tests.diagnostics.independent_generator import generate_session, hidden_col
 from workbench.colorimetry import delta_E2000
 from workbench.diagnostics import diagnose
 from workbench.diagnostics.model_choice import fit_candidate, has_sparse_sweep
+from workbench.measurement import adaptive
+from workbench.measurement.plans import Patch
 
 
 def _adaptive(scenario, seed, folder):
@@ -59,11 +61,16 @@ def test_along_dense_sweeps_the_grey_ramp_still_replaces_the_extension_on_a_lowe
 
 
 def test_against_the_interactions_own_term_a_gain_at_the_whites_needs_the_other_rows_no_worse(
-        tmp_path):
+        tmp_path, monkeypatch):
     # a chromatic crosstalk measured with the adaptive plan: the sweep correction won the
     # cross-validation by 0.195 ± 0.079, all of it at the white references (a level of its own
     # ramp), predicting the other rows 0.106 ± 0.053 worse; it scored 0.225 on hidden colours
-    # where the extension with the interaction's term scores 0.167 (the paper plan 0.202)
+    # where the extension with the interaction's term scores 0.167 (the paper plan 0.202). The
+    # session as the plan measured it then, its validation colours followed by one white: with a
+    # white among them each minute (as now) the correction's gain is within noise on this display
+    # and the rule is not reached
+    monkeypatch.setattr(adaptive, "_with_drift_references",
+                        lambda validation, seconds: (*validation, Patch("white", (255, 255, 255))))
     session, truth, rgb, diagnosis = _adaptive("channel-interaction/crosstalk", 41001, tmp_path)
     choice = diagnosis.model_choice
     assert choice.chosen == "extension", choice.reason

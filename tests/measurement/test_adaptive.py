@@ -27,7 +27,9 @@ from workbench.measurement.adaptive import (
     adaptive_core_plan,
     plan_state,
     replay_decisions,
+    _with_drift_references,
     validation_count,
+    validation_patches,
 )
 from workbench.measurement.journal import read_journal
 from workbench.measurement.patch_cost import fit_patch_cost
@@ -136,16 +138,38 @@ def test_the_first_decision_reads_each_primary_again(whole):
 def test_drift_references_by_elapsed_time(whole):
     core = len(adaptive_core_plan(SEED))
     # the planner's references, from the core's last white on (the core's whites follow its sweeps)
-    whites = [r for r in whole.records if r.kind == "white" and r.index >= core - 1]
+    # to the validation colours' first
+    validation = min(r.index for r in whole.records if r.kind == "validation")
+    whites = [r for r in whole.records if r.kind == "white" and core - 1 <= r.index < validation]
     gaps = np.diff([r.t_s for r in whites])
     references = [d for d in whole.decisions if d["action"] == "drift-reference"]
     assert references and all("since the last white" in d["reason"] for d in references)
     # a reference is due DRIFT_REFERENCE_INTERVAL_S after the last white; a patch in flight may
     # add its own seconds
     longest_patch = max(r.duration_s for r in whole.records if r.kind != "black")
-    fit_gaps = gaps[:-1]  # the last gap spans the validation colours
+    fit_gaps = gaps
     assert fit_gaps.size >= 2
     assert np.all(fit_gaps <= DRIFT_REFERENCE_INTERVAL_S + 2 * longest_patch)
+
+
+def test_the_validation_colours_carry_drift_references():
+    """A white each DRIFT_REFERENCE_INTERVAL_S of the validation colours' predicted time, and a
+    last white: the validation colours are corrected for drift as the fit rows are."""
+    validation = validation_patches(SEED, 30)
+    dark = {p.rgb for p in validation[5:7]}  # two dark ones, a minute each
+
+    def seconds(patches):
+        return sum(60.0 if p.rgb in dark else 4.0 for p in patches)
+
+    closing = _with_drift_references(validation, seconds)
+    assert [p for p in closing if p.kind == "validation"] == list(validation)
+    assert closing[-1].kind == "white" and sum(p.kind == "white" for p in closing) >= 4
+    since = 0.0
+    for patch in closing:
+        since = 0.0 if patch.kind == "white" else since + seconds([patch])
+        assert since <= DRIFT_REFERENCE_INTERVAL_S or seconds([patch]) >= DRIFT_REFERENCE_INTERVAL_S
+    assert _with_drift_references(validation[:3], seconds)[-1].kind == "white"
+    assert sum(p.kind == "white" for p in _with_drift_references(validation[:3], seconds)) == 1
 
 
 def test_resume_after_a_crash_reproduces_the_decisions(whole, tmp_path):
