@@ -114,3 +114,27 @@ def test_a_record_repeated_elsewhere_in_the_json_is_not_listed_twice_on_its_card
     record = {"effect": "unexplained-residual", "evidence": "a gap", "z": 3.0, "consequence_of": None}
     card, = views.finding_cards(_Diagnosis({"findings": [record], "unexplained": dict(record)}))
     assert not any(name.startswith("unexplained") for name, _ in card.fields)
+
+
+@pytest.mark.parametrize("effects, corrected", [({"temporal-drift": "step"}, True), ({}, False)])
+def test_the_white_references_show_the_correction_as_applied(effects, corrected):
+    from tests.diagnostics.independent_generator import generate_session
+    from workbench.diagnostics import diagnose
+
+    generated = generate_session(effects, seed=51001, plan="authors-2024", noise=0.002)
+    diagnosis = diagnose(generated.session)
+    drift = diagnosis.context.drift
+    assert diagnosis.context.drift_found is corrected
+    series = views.white_reference_view(diagnosis).series
+    assert series[0].name == "white" and np.allclose(series[0].y, 100 * drift.gains)
+    if not corrected:  # nothing corrected, nothing drawn but the references
+        assert len(series) == 1
+        return
+    correction = series[1]
+    assert correction.name == "correction" and not correction.points
+    np.testing.assert_allclose(correction.y, 100 * drift.gain(correction.x * 60))
+    # it passes through the smoothed references (a step: two levels), not each one's noise
+    at_references = np.interp(series[0].x, correction.x, correction.y)
+    np.testing.assert_allclose(at_references, 100 * drift.smoothed)
+    assert np.ptp(at_references) == pytest.approx(
+        100 * generated.display.drift[1] / (1 - generated.display.drift[1]), rel=0.1)

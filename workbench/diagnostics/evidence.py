@@ -183,6 +183,12 @@ class DriftCorrection:
         return replace(session, XYZ=session.XYZ / g, metadata=dict(session.metadata),
                        spectra=None if session.spectra is None else session.spectra / g)
 
+    def sampled(self, points: int = 400) -> tuple[np.ndarray, np.ndarray]:
+        """``(t, g(t))`` at ``points`` times across the references and at each of them: the
+        correction as applied, to plot beside the references."""
+        t = np.union1d(np.linspace(self.times[0], self.times[-1], points), self.times)
+        return t, self.gain(t)
+
     @property
     def span(self) -> float:
         """Largest relative change of the white over the session."""

@@ -107,7 +107,13 @@ def _drift_figure(diagnosis: Diagnosis) -> Figure | None:
     figure = Figure(figsize=(5, 3.2), layout="constrained")
     axis = figure.subplots()
     by_rows = diagnosis.context.time_basis == "row order"
-    axis.plot(drift.times if by_rows else drift.times / 60, 100 * drift.gains, "o-", color="#444")
+    scale = 1.0 if by_rows else 1.0 / 60
+    axis.plot(drift.times * scale, 100 * drift.gains, "o", color="#444", label="white references")
+    if diagnosis.context.drift_found:
+        # the correction as applied: the references smoothed to their noise, ramped between them
+        t, gain = drift.sampled()
+        axis.plot(t * scale, 100 * gain, "-", color="#2e6fd0", label="correction")
+        axis.legend(fontsize="small")
     axis.set_xlabel("row (no times: row order)" if by_rows else "session time, min")
     axis.set_ylabel("white Y, % of final")
     axis.set_title("white references vs time")

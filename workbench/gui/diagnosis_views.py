@@ -198,12 +198,17 @@ def chromaticity_view(diagnosis) -> PlotView:
 
 
 def white_reference_view(diagnosis) -> PlotView | None:
-    """The white references' Y over the session (% of the last ones), or None without times."""
+    """The white references' Y over the session (% of the settled state), and the correction as
+    applied where drift was found (smoothed to their noise, ramped between them), or None
+    without times."""
     drift = diagnosis.context.drift
     if drift is None:
         return None
-    return PlotView("white references", "session time, min", "white Y, % of final",
-                    (Series("white", drift.times / 60, 100 * drift.gains, 3),))
+    series = (Series("white", drift.times / 60, 100 * drift.gains, 3),)
+    if diagnosis.context.drift_found:
+        t, gain = drift.sampled()
+        series += (Series("correction", t / 60, 100 * gain, 2, points=False),)
+    return PlotView("white references", "session time, min", "white Y, % of final", series)
 
 
 @dataclass(frozen=True)
