@@ -138,3 +138,17 @@ def test_the_white_references_show_the_correction_as_applied(effects, corrected)
     np.testing.assert_allclose(at_references, 100 * drift.smoothed)
     assert np.ptp(at_references) == pytest.approx(
         100 * generated.display.drift[1] / (1 - generated.display.drift[1]), rel=0.1)
+
+
+def test_without_times_the_white_references_are_drawn_against_row_order(tmp_path):
+    from workbench.diagnostics import diagnose
+    from workbench.measurement.ti3 import write_session_ti3
+    from workbench.session_readers import read_session
+    from workbench.simulated_sessions import simulate_session
+
+    path = write_session_ti3(simulate_session({"temporal-drift": 0.05}, seed=1), tmp_path / "s.ti3")
+    diagnosis = diagnose(read_session(path))
+    assert diagnosis.context.time_basis == "row order"
+    view = views.white_reference_view(diagnosis)
+    assert view.x_label == "row (no times: row order)"
+    np.testing.assert_allclose(view.series[0].x, diagnosis.context.drift.times)  # rows, not minutes

@@ -198,17 +198,20 @@ def chromaticity_view(diagnosis) -> PlotView:
 
 
 def white_reference_view(diagnosis) -> PlotView | None:
-    """The white references' Y over the session (% of the settled state), and the correction as
-    applied where drift was found (smoothed to their noise, ramped between them), or None
-    without times."""
+    """The white references' Y over the session (% of the settled state; against row order where
+    the rows have no times), and the correction as applied where drift was found (smoothed to
+    their noise, ramped between them), or None where no two whites can be ordered."""
     drift = diagnosis.context.drift
     if drift is None:
         return None
-    series = (Series("white", drift.times / 60, 100 * drift.gains, 3),)
+    by_rows = diagnosis.context.time_basis == "row order"
+    scale = 1.0 if by_rows else 1.0 / 60
+    series = (Series("white", drift.times * scale, 100 * drift.gains, 3),)
     if diagnosis.context.drift_found:
         t, gain = drift.sampled()
-        series += (Series("correction", t / 60, 100 * gain, 2, points=False),)
-    return PlotView("white references", "session time, min", "white Y, % of final", series)
+        series += (Series("correction", t * scale, 100 * gain, 2, points=False),)
+    return PlotView("white references", "row (no times: row order)" if by_rows else
+                    "session time, min", "white Y, % of final", series)
 
 
 @dataclass(frozen=True)
