@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pyqtgraph as pg
+from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor
 
-__all__ = ["PALETTE", "pen", "brush", "ViewPlot", "configure_plot"]
+__all__ = ["PALETTE", "pen", "brush", "ViewPlot", "configure_plot", "emptiest_corner"]
 
 PALETTE = ("#c0392b", "#27ae60", "#2e6fd0", "#555555", "#e67e22", "#8e44ad")
 """Colours by index: red, green, blue channels, grey, then two more."""
@@ -23,8 +24,6 @@ def pen(index: int, width: float = 1.6, dashed: bool = False):
     """A cached pen of palette colour ``index``."""
     key = (index, width, dashed)
     if key not in _PENS:
-        from PySide6.QtCore import Qt
-
         _PENS[key] = pg.mkPen(PALETTE[index % len(PALETTE)], width=width,
                               style=Qt.PenStyle.DashLine if dashed else Qt.PenStyle.SolidLine)
     return _PENS[key]
@@ -56,12 +55,51 @@ def configure_plot(plot: pg.PlotItem, title: str, x_label: str, y_label: str) ->
         axis.label.setFont(pg.QtGui.QFont("", 9))
 
 
+class _Title(pg.LabelItem):
+    """A plot's title that never makes the plot wider than its text: where the plot is narrower
+    (four in a row on a 1366 × 768 screen) the title is cut, where pyqtgraph's own title widened
+    the plot past its cell and the plot beside it hid the right-hand side of its data."""
+
+    def updateMin(self):
+        super().updateMin()
+        self.setMinimumWidth(0)
+        height = self._sizeHint[Qt.SizeHint.MinimumSize][1]
+        self._sizeHint[Qt.SizeHint.MinimumSize] = (0, height)
+        self._sizeHint[Qt.SizeHint.PreferredSize] = (0, height)
+        self.updateGeometry()
+
+
+def emptiest_corner(points: list) -> tuple[int, int]:
+    """The quarter of the plot that the fewest of ``points`` fall in, as ``(right, bottom)`` (0 or 1).
+
+    ``points``: (x, y) arrays of every series, in data coordinates (y up). Each is placed within
+    the range of all of them; a quarter wins ties in the order top left, top right, bottom left,
+    bottom right. The legend goes there, so it covers as little of the data as it can.
+    """
+    xs = np.concatenate([np.asarray(x, float).ravel() for x, _ in points] or [np.zeros(0)])
+    ys = np.concatenate([np.asarray(y, float).ravel() for _, y in points] or [np.zeros(0)])
+    finite = np.isfinite(xs) & np.isfinite(ys)
+    xs, ys = xs[finite], ys[finite]
+    if xs.size == 0:
+        return 0, 0
+    x_mid = 0.5 * (xs.min() + xs.max())
+    y_mid = 0.5 * (ys.min() + ys.max())
+    counts = {(right, bottom): int(np.sum(((xs > x_mid) == bool(right)) & ((ys < y_mid) == bool(bottom))))
+              for bottom in (0, 1) for right in (0, 1)}
+    return min(counts, key=lambda corner: (counts[corner], corner[1], corner[0]))
+
+
 class ViewPlot(pg.PlotWidget):
     """Shows one :class:`PlotView` at a time; a new view re-uses the curves of the last."""
 
     def __init__(self, parent=None, legend: bool = True):
         super().__init__(parent, background="w")
         self.setMinimumSize(220, 170)
+        item = self.getPlotItem()
+        item.layout.removeItem(item.titleLabel)
+        item.scene().removeItem(item.titleLabel)
+        item.titleLabel = _Title("", size="11pt", parent=item)
+        item.layout.addItem(item.titleLabel, 0, 1)
         self._curves: list = []
         self._bars: list = []
         self._legend = self.getPlotItem().addLegend(
@@ -102,9 +140,11 @@ class ViewPlot(pg.PlotWidget):
         if self._legend is not None:
             self._legend.clear()
         bars = 0
+        drawn = []
         for i, series in enumerate(view.series):
             curve = self._curve(i)
             x, y = np.asarray(series.x, float), np.asarray(series.y, float)
+            drawn.append((x, y))
             if series.bars:
                 bottom = min(0.0, float(y.min())) if len(y) and float(y.min()) < 50 else 0.9 * float(y.min())
                 self._bar(bars).setOpts(x=x, height=y - bottom, y0=bottom, width=0.6, brush=brush(series.colour, 170),
@@ -123,5 +163,9 @@ class ViewPlot(pg.PlotWidget):
             curve.setData([], [])
         for bar in self._bars[bars:]:
             bar.setOpts(x=[], height=[])
+        if self._legend is not None:
+            right, bottom = emptiest_corner(drawn)
+            self._legend.anchor(itemPos=(right, bottom), parentPos=(right, bottom),
+                                offset=(-5 if right else 5, -5 if bottom else 5))
         plot.getAxis("bottom").setTicks([list(view.x_ticks)] if view.x_ticks else None)
         plot.enableAutoRange()
