@@ -139,7 +139,8 @@ def _sweep_views(diagnosis) -> tuple:
     for c, sweep in enumerate(diagnosis.context.sweeps):
         raw = raw_sweeps[c]
         gamma = float(diagnosis.baseline.gamma[c])
-        fit = [Series("measured (baseline's data)", raw.drive * 255, raw.output, 3),
+        # short labels: a narrow plot's legend cuts what does not fit in it
+        fit = [Series("measured", raw.drive * 255, raw.output, 3),
                Series(f"baseline γ = {gamma:.2f}", _GRID * 255, _GRID ** gamma, 3, points=False)]
         residuals = [Series("baseline", raw.drive * 255, 100 * (raw.output - raw.drive ** gamma), 3)]
         if hasattr(extended, "tone"):
@@ -147,7 +148,9 @@ def _sweep_views(diagnosis) -> tuple:
             interaction = getattr(extended, "interaction", None)
             bends = interaction is not None and (interaction.load_weights is not None
                                                  or interaction.axis_ratio is not None)
-            fit += [Series("black subtracted" + (", drift corrected" if diagnosis.context.drift_found else ""),
+            # the rows the extension is fitted to: black subtracted, and drift corrected too
+            # where drift was found
+            fit += [Series("drift-corrected" if diagnosis.context.drift_found else "black-subtracted",
                            sweep.drive * 255, sweep.output, c),
                     Series(f"extended ({curve.form}" + (" × its interaction)" if bends else ")"),
                            _GRID * 255, _model_sweep(extended, c, _GRID), c, points=False)]
