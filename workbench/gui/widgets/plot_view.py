@@ -56,12 +56,13 @@ def configure_plot(plot: pg.PlotItem, title: str, x_label: str, y_label: str) ->
 
 
 class _Title(pg.LabelItem):
-    """A plot's title that never makes the plot wider than its text: where the plot is narrower
-    (four in a row on a 1366 × 768 screen) the title is cut, where pyqtgraph's own title widened
-    the plot past its cell and the plot beside it hid the right-hand side of its data."""
+    """A plot's title that never widens its plot to fit the text: where the plot is narrower
+    (four in a row on a 1366 × 768 screen) the title is cut. pyqtgraph's own title sets its
+    minimum width to the text's, which widened the plot past its cell, and the plot beside it
+    hid the right-hand side of its data."""
 
     def updateMin(self):
-        super().updateMin()
+        super().updateMin()  # sets the text's size as the minimum and the size hints
         self.setMinimumWidth(0)
         height = self._sizeHint[Qt.SizeHint.MinimumSize][1]
         self._sizeHint[Qt.SizeHint.MinimumSize] = (0, height)
@@ -70,7 +71,7 @@ class _Title(pg.LabelItem):
 
 
 def emptiest_corner(points: list) -> tuple[int, int]:
-    """The quarter of the plot that the fewest of ``points`` fall in, as ``(right, bottom)`` (0 or 1).
+    """The quarter of the plot that the fewest of ``points`` fall in: ``(right, bottom)``, 0 or 1.
 
     ``points``: (x, y) arrays of every series, in data coordinates (y up). Each is placed within
     the range of all of them; a quarter wins ties in the order top left, top right, bottom left,
@@ -84,7 +85,8 @@ def emptiest_corner(points: list) -> tuple[int, int]:
         return 0, 0
     x_mid = 0.5 * (xs.min() + xs.max())
     y_mid = 0.5 * (ys.min() + ys.max())
-    counts = {(right, bottom): int(np.sum(((xs > x_mid) == bool(right)) & ((ys < y_mid) == bool(bottom))))
+    counts = {(right, bottom): int(np.sum(((xs > x_mid) == bool(right))
+                                          & ((ys < y_mid) == bool(bottom))))
               for bottom in (0, 1) for right in (0, 1)}
     return min(counts, key=lambda corner: (counts[corner], corner[1], corner[0]))
 
@@ -95,7 +97,7 @@ class ViewPlot(pg.PlotWidget):
     def __init__(self, parent=None, legend: bool = True):
         super().__init__(parent, background="w")
         self.setMinimumSize(220, 170)
-        item = self.getPlotItem()
+        item = self.getPlotItem()  # its title, in the same place, replaced by one that never widens it
         item.layout.removeItem(item.titleLabel)
         item.scene().removeItem(item.titleLabel)
         item.titleLabel = _Title("", size="11pt", parent=item)
