@@ -152,7 +152,7 @@ def _sweep_views(diagnosis) -> tuple:
             # where drift was found
             fit += [Series("drift-corrected" if diagnosis.context.drift_found else "black-subtracted",
                            sweep.drive * 255, sweep.output, c),
-                    Series(f"extended ({curve.form}" + (" × its interaction)" if bends else ")"),
+                    Series(f"extended ({curve.form}" + (" × interaction)" if bends else ")"),
                            _GRID * 255, _model_sweep(extended, c, _GRID), c, points=False)]
             residuals.append(Series("extended", sweep.drive * 255,
                                     100 * (sweep.output - _model_sweep(extended, c, sweep.drive)), c))

@@ -105,7 +105,7 @@ class ViewPlot(pg.PlotWidget):
         self._curves: list = []
         self._bars: list = []
         self._legend = self.getPlotItem().addLegend(
-            offset=(5, 5), labelTextSize="8pt", brush=pg.mkBrush(255, 255, 255, 140))  if legend else None
+            offset=(5, 5), labelTextSize="8pt", brush=None)  if legend else None
         self._empty = pg.TextItem("", color="#777", anchor=(0.5, 0.5))
         self.getPlotItem().addItem(self._empty, ignoreBounds=True)
 
