@@ -542,12 +542,11 @@ class AdaptivePlanner:
                       measured_before=measured_before, findings=findings, validation=len(validation))
 
         def stop(why: str) -> Decision:
-            patches = closing
             among = sum(p.kind == "white" for p in closing) - 1
             whites = (f"a white among them each {DRIFT_REFERENCE_INTERVAL_S:.0f} s ({among}) and a "
                       "last white" if among else "and a last white")
-            return Decision(action="stop", patches=patches, predicted_after_dE00=None,
-                            cost_s=seconds(patches),
+            return Decision(action="stop", patches=closing, predicted_after_dE00=None,
+                            cost_s=reserve,
                             reason=(f"stop: {why}; predicted held-out ΔE00 {before:.3f}. Now the "
                                     f"{len(validation)} validation colours (seeded, never used "
                                     f"to fit or to choose{fewer}), {whites}"), **common)

@@ -75,7 +75,8 @@ def emptiest_corner(points: list) -> tuple[int, int]:
 
     ``points``: (x, y) arrays of every series, in data coordinates (y up). Each is placed within
     the range of all of them; a quarter wins ties in the order top left, top right, bottom left,
-    bottom right. The legend goes there, so it covers as little of the data as it can.
+    bottom right (the order ``counts`` is filled in). The legend goes there, so it covers as
+    little of the data as it can.
     """
     xs = np.concatenate([np.asarray(x, float).ravel() for x, _ in points] or [np.zeros(0)])
     ys = np.concatenate([np.asarray(y, float).ravel() for _, y in points] or [np.zeros(0)])
@@ -88,7 +89,7 @@ def emptiest_corner(points: list) -> tuple[int, int]:
     counts = {(right, bottom): int(np.sum(((xs > x_mid) == bool(right))
                                           & ((ys < y_mid) == bool(bottom))))
               for bottom in (0, 1) for right in (0, 1)}
-    return min(counts, key=lambda corner: (counts[corner], corner[1], corner[0]))
+    return min(counts, key=counts.get)
 
 
 class ViewPlot(pg.PlotWidget):
@@ -104,7 +105,7 @@ class ViewPlot(pg.PlotWidget):
         item.layout.addItem(item.titleLabel, 0, 1)
         self._curves: list = []
         self._bars: list = []
-        self._legend = self.getPlotItem().addLegend(
+        self._legend = item.addLegend(
             offset=(5, 5), labelTextSize="8pt", brush=None)  if legend else None
         self._empty = pg.TextItem("", color="#777", anchor=(0.5, 0.5))
         self.getPlotItem().addItem(self._empty, ignoreBounds=True)
