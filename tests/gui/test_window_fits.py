@@ -3,7 +3,7 @@
 The Calibrate form fits its column (every button's whole text, every list's current entry, the
 estimate wrapped; no horizontal scrollbar; with each patch display, the headset's browser's URL, QR code
 and state included, and with the adaptive plan's settings); on Fit & diagnose the findings column does not scroll
-sideways and what was checked and not found is a table (effect, z against the critical value,
+sideways, nor does the validation table, and what was checked and not found is a table (effect, z against the critical value,
 statistic ± SE, impact, in the model or why not; the evidence as each row's tooltip); the Export page
 opens on a summary of what was written with its validation figures, the JSON one click away.
 """
@@ -197,6 +197,20 @@ def test_fit_and_diagnose_shows_what_was_checked_as_a_table_and_the_findings_col
     assert "temporal-drift" not in page.details.toPlainText()  # said once, in the table
     page.details_button.click()
     assert page.checked_stack.currentWidget() is table
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_the_validation_table_shows_every_column_without_scrolling_sideways(diagnosed, size):
+    page = _settle(diagnosed, "diagnose", size)
+    table = page.table
+    assert table.isVisible() and table.rowCount() == 50
+    assert not table.horizontalScrollBar().isVisible()
+    assert table.horizontalHeader().length() <= table.viewport().width()
+    # the worst first, each row's swatch the measured colour and both models' predictions
+    assert table.values(2) == sorted(table.values(2), reverse=True)
+    icon = table.item(0, 0).icon()
+    assert not icon.isNull() and icon.availableSizes()[0].width() == 3 * icon.availableSizes()[0].height()
+    assert "baseline" in table.horizontalHeaderItem(0).toolTip()
 
 
 def test_checked_rows_give_an_untested_effect_a_row_with_its_reason():

@@ -4,25 +4,37 @@ from __future__ import annotations
 
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
-from PySide6.QtGui import QColor, QIcon, QPixmap
-from PySide6.QtWidgets import QAbstractItemView, QHeaderView, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
+from PySide6.QtGui import QColor, QIcon, QPainter, QPixmap
+from PySide6.QtWidgets import QAbstractItemView, QHeaderView, QStyle, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
 from workbench.gui import diagnosis_views as views
 from workbench.gui.widgets.plot_view import brush, configure_plot, pen
 
 __all__ = ["ValidationTable", "ValidationHistogram", "swatch_icon"]
 
-_COLUMNS = ("measured | extended", "DAC r, g, b", "ΔE00 extended", "ΔE00 baseline", "measured | baseline")
+_COLUMNS = ("measured\n| ext. | base", "DAC\nr, g, b", "ΔE00\next.", "ΔE00\nbase")
+"""Two-line, short headers (their tooltips say them in full), so that the four columns fit the 300
+pixels the table has on a 1366 x 768 screen (one-line headers and a swatch column for each model
+made it scroll sideways)."""
+
+_TIPS = ("the measured colour, then the extended model's and the baseline's prediction of it "
+         "(sRGB, clipped to the display's range)",
+         "the colour's drive values", "CIEDE2000 between measured and the extended model",
+         "CIEDE2000 between measured and the baseline (gamma + 3x3)")
+
+SWATCH_SIZE = (54, 18)
+"""Pixels of a swatch icon: three parts of 18 x 18."""
 
 
-def swatch_icon(left, right, size: int = 36) -> QIcon:
-    """An icon of two halves: ``left`` and ``right`` 8-bit sRGB."""
-    pixmap = QPixmap(size, size // 2)
-    pixmap.fill(QColor(*left))
-    from PySide6.QtGui import QPainter
-
+def swatch_icon(*colours, size: tuple[int, int] = SWATCH_SIZE) -> QIcon:
+    """An icon of equal parts side by side, one per 8-bit sRGB colour, left to right."""
+    width, height = size
+    pixmap = QPixmap(width, height)
+    pixmap.fill(QColor(*colours[0]))
     painter = QPainter(pixmap)
-    painter.fillRect(size // 2, 0, size - size // 2, size // 2, QColor(*right))
+    for i, colour in enumerate(colours[1:], start=1):
+        left = i * width // len(colours)
+        painter.fillRect(left, 0, width - left, height, QColor(*colour))
     painter.end()
     return QIcon(pixmap)
 
@@ -44,26 +56,47 @@ class ValidationTable(QTableWidget):
     def __init__(self, parent=None):
         super().__init__(0, len(_COLUMNS), parent)
         self.setHorizontalHeaderLabels(_COLUMNS)
+        for column, tip in enumerate(_TIPS):
+            self.horizontalHeaderItem(column).setToolTip(tip)
         self.setEditTriggers(QAbstractItemView.EditTrigger.NoEditTriggers)
         self.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
         self.verticalHeader().setVisible(False)
-        self.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
-        self.setIconSize(pg.QtCore.QSize(36, 18))
+        header = self.horizontalHeader()
+        # the swatches as wide as their icons, the drives as their text; the ΔE00 columns share the rest
+        # (Qt sizes a header to its label on one line, so the two-line labels' widths are our own)
+        for column, content in ((0, SWATCH_SIZE[0] + 12), (1, self._text_width("255, 255, 255"))):
+            header.setSectionResizeMode(column, QHeaderView.ResizeMode.Fixed)
+            header.resizeSection(column, max(content, self._header_width(column)))
+        for column in (2, 3):
+            header.setSectionResizeMode(column, QHeaderView.ResizeMode.Stretch)
+        self.setIconSize(pg.QtCore.QSize(*SWATCH_SIZE))
+
+    def _text_width(self, text: str) -> int:
+        """Pixels a cell needs for ``text`` (its margins included)."""
+        margin = self.style().pixelMetric(QStyle.PixelMetric.PM_FocusFrameHMargin, None, self) + 1
+        return self.fontMetrics().horizontalAdvance(text) + 2 * margin + 4
+
+    def _header_width(self, column: int) -> int:
+        """Pixels a header needs for its longest line, the sort arrow and the margins."""
+        header = self.horizontalHeader()
+        style, metrics = header.style(), header.fontMetrics()
+        margin = style.pixelMetric(QStyle.PixelMetric.PM_HeaderMargin, None, header)
+        arrow = style.pixelMetric(QStyle.PixelMetric.PM_HeaderMarkSize, None, header)
+        longest = max(metrics.horizontalAdvance(line) for line in _COLUMNS[column].split("\n"))
+        return longest + 3 * margin + arrow
 
     def show_diagnosis(self, diagnosis) -> None:
         rows = () if diagnosis is None else views.validation_rows(diagnosis)
         self.setSortingEnabled(False)
         self.setRowCount(len(rows))
         for i, row in enumerate(rows):
-            first = QTableWidgetItem("")
-            first.setIcon(swatch_icon(row.measured_srgb8, row.extended_srgb8))
-            last = QTableWidgetItem("")
-            last.setIcon(swatch_icon(row.measured_srgb8, row.baseline_srgb8))
-            self.setItem(i, 0, first)
+            swatch = QTableWidgetItem("")
+            swatch.setIcon(swatch_icon(row.measured_srgb8, row.extended_srgb8, row.baseline_srgb8))
+            swatch.setToolTip(_TIPS[0])
+            self.setItem(i, 0, swatch)
             self.setItem(i, 1, QTableWidgetItem("{}, {}, {}".format(*row.rgb)))
             self.setItem(i, 2, _Number(row.extended_dE00))
             self.setItem(i, 3, _Number(row.baseline_dE00))
-            self.setItem(i, 4, last)
         self.setSortingEnabled(True)
         self.sortItems(2, Qt.SortOrder.DescendingOrder)
 
