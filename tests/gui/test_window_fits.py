@@ -1,11 +1,13 @@
 """The window at its default size and at 1366 × 768: nothing clipped, no sideways scrolling.
 
 The Calibrate form fits its column (every button's whole text, every list's current entry, the
-estimate wrapped; no horizontal scrollbar; with each patch display, the headset's browser's URL, QR code
-and state included, and with the adaptive plan's settings); on Fit & diagnose the findings column does not scroll
-sideways, nor does the validation table, and what was checked and not found is a table (effect, z against the critical value,
-statistic ± SE, impact, in the model or why not; the evidence as each row's tooltip); the Export page
-opens on a summary of what was written with its validation figures, the JSON one click away.
+estimate wrapped; no horizontal scrollbar; with each patch display, the headset's browser's URL,
+QR code and state included, and with the adaptive plan's settings); on Fit & diagnose neither the
+findings column nor the validation table scrolls sideways, and what was checked and not found is
+a table (effect, z against the critical value, statistic ± SE, impact, in the model or why not;
+the evidence as each row's tooltip); the Illuminants page's source table shows every column; the
+Export page opens on a summary of what was written with its validation figures, the JSON one
+click away.
 """
 
 import gc
@@ -31,6 +33,7 @@ from workbench.gui import diagnosis_views as views  # noqa: E402
 from workbench.gui.main_window import DEFAULT_SIZE, MainWindow  # noqa: E402
 from workbench.gui.settings import WindowSettings  # noqa: E402
 from workbench.gui.widgets.checked_table import CHECKED_COLUMNS  # noqa: E402
+from workbench.gui.widgets_illuminants import CLIPPED_MARK, SOURCE_COLUMNS  # noqa: E402
 from workbench.session import write_session_csv  # noqa: E402
 from workbench.workspace import Workspace  # noqa: E402
 
@@ -211,6 +214,34 @@ def test_the_validation_table_shows_every_column_without_scrolling_sideways(diag
     icon = table.item(0, 0).icon()
     assert not icon.isNull() and icon.availableSizes()[0].width() == 3 * icon.availableSizes()[0].height()
     assert "baseline" in table.horizontalHeaderItem(0).toolTip()
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_the_illuminants_table_shows_every_column_without_scrolling_sideways(window, size):
+    page = _settle(window, "illuminants", size)
+    deadline = time.monotonic() + LOAD_TIMEOUT_MS / 1000
+    while page.busy and time.monotonic() < deadline:
+        QApplication.processEvents()
+        time.sleep(0.01)
+    assert not page.busy, "the source table's rows were not computed in time"
+    for _ in range(10):
+        QApplication.processEvents()
+    table, model = page.table, page.model
+    assert not table.horizontalScrollBar().isVisible()
+    assert table.horizontalHeader().length() <= table.viewport().width()
+    name = SOURCE_COLUMNS.index("Name")
+    assert table.columnWidth(name) >= table.fontMetrics().horizontalAdvance("CIE FL3.15")  # names readable
+    # a long id is elided, and whole in the tooltip
+    longest = max(model.ids(), key=len)
+    cell = model.index(model.ids().index(longest), 0)
+    assert table.columnWidth(0) < table.fontMetrics().horizontalAdvance(longest)
+    assert longest in model.data(cell, Qt.ItemDataRole.ToolTipRole)
+    # a clipped light RGB is marked, and the mark is explained
+    headset = SOURCE_COLUMNS.index("Light RGB (headset)")
+    clipped = [i for i, row in enumerate(model.rows()) if not row.light_in_gamut]
+    assert clipped and all(model.data(model.index(i, headset)).endswith(CLIPPED_MARK) for i in clipped)
+    assert "clipped" in model.data(model.index(clipped[0], headset), Qt.ItemDataRole.ToolTipRole)
+    assert f"{CLIPPED_MARK.strip()} after a headset light RGB: clipped" in page.status.text()
 
 
 def test_checked_rows_give_an_untested_effect_a_row_with_its_reason():

@@ -24,6 +24,10 @@ SOURCE_COLUMNS = ("Id", "Name", "Kind", "CCT (K)", "Duv", "Rf", "Rg", "x", "y",
                   "Light RGB (headset)", "Light RGB (sRGB)")
 """Columns of the source table."""
 
+CLIPPED_MARK = " *"
+"""After a headset light RGB that is clipped (outside the headset's gamut; the tooltips say so): the
+words "(clipped)" made the column so wide that the table scrolled sideways on a 1366 x 768 screen."""
+
 SIMULATED_INSTRUMENT = "Simulated CS-2000 (emulator, white tile in a lightbooth)"
 
 SORT_ROLE = Qt.ItemDataRole.UserRole + 1
@@ -58,6 +62,10 @@ class SourceTableModel(QAbstractTableModel):
     def ids(self) -> list[str]:
         return [row.id for row in self._rows]
 
+    def rows(self) -> list:
+        """The rows (:class:`~workbench.illuminants.comparison.SourceRow`), in the order added."""
+        return list(self._rows)
+
     def row_of(self, source_id: str):
         i = self._index.get(source_id)
         return None if i is None else self._rows[i]
@@ -71,13 +79,14 @@ class SourceTableModel(QAbstractTableModel):
 
     def headerData(self, section, orientation, role=Qt.ItemDataRole.DisplayRole):  # noqa: N802
         if orientation == Qt.Orientation.Horizontal and role == Qt.ItemDataRole.DisplayRole:
-            return SOURCE_COLUMNS[section]
+            return SOURCE_COLUMNS[section].replace(" (", "\n(")  # two lines: narrower
         if orientation == Qt.Orientation.Horizontal and role == Qt.ItemDataRole.ToolTipRole:
             return {
                 "Rf": "CIE 224:2017 colour fidelity index (100 = renders colours like the reference)",
                 "Rg": "ANSI/IES TM-30-18 gamut index (100 = same saturation as the reference)",
                 "Duv": "distance from the Planckian locus in CIE 1960 uv",
-                "Light RGB (headset)": "level-1 light colour (8-bit) for the current profile",
+                "Light RGB (headset)": ("level-1 light colour (8-bit) for the current profile; "
+                                        f"'{CLIPPED_MARK.strip()}': clipped, the light is outside the headset's gamut"),
                 "Light RGB (sRGB)": "level-1 light colour (8-bit) for the ideal sRGB display",
             }.get(SOURCE_COLUMNS[section])
         return None
@@ -101,7 +110,7 @@ class SourceTableModel(QAbstractTableModel):
             if column.startswith("Light RGB"):
                 text = _rgb_text(value)
                 if column == "Light RGB (headset)" and not row.light_in_gamut:
-                    text += " (clipped)"
+                    text += CLIPPED_MARK
                 return text
             return str(value)
         if role == SORT_ROLE:
@@ -113,7 +122,10 @@ class SourceTableModel(QAbstractTableModel):
         if role == Qt.ItemDataRole.TextAlignmentRole and column not in ("Id", "Name", "Kind"):
             return int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         if role == Qt.ItemDataRole.ToolTipRole:
-            return f"{row.name} ({row.kind})"
+            if column == "Light RGB (headset)" and not row.light_in_gamut:
+                return (f"{_rgb_text(value)}: clipped, {row.name} is outside the headset's gamut "
+                        "(the nearest colour it can show)")
+            return f"{row.name} ({row.kind}), id {row.id}"
         return None
 
 

@@ -34,6 +34,7 @@ from PySide6.QtWidgets import (
 from workbench.errors import WorkbenchError
 from workbench.gui.jobs import start_job
 from workbench.gui.widgets_illuminants import (
+    CLIPPED_MARK,
     SORT_ROLE,
     ColorCheckerSwatches,
     MeasureLightDialog,
@@ -49,6 +50,9 @@ __all__ = ["IlluminantsPage"]
 
 MEASURE_TIME_SCALE = 0.02
 """How long the simulated CS-2000 makes a measurement wait, as a fraction of the real timing."""
+
+ID_WIDTH_TEXT = "cie-fl3-12"
+"""The source table's id column is as wide as this (a longer id is elided; the tooltip has it)."""
 
 
 class IlluminantsPage(QWidget):
@@ -90,6 +94,11 @@ class IlluminantsPage(QWidget):
         self.table.verticalHeader().setDefaultSectionSize(self.fontMetrics().height() + 6)
         header = self.table.horizontalHeader()
         header.setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+        # the id as wide as a CIE one, elided in the middle (whole in the tooltip; the longest
+        # built-in ids took a quarter of the table, and the light RGB scrolled out of sight)
+        header.setSectionResizeMode(0, QHeaderView.ResizeMode.Interactive)
+        header.resizeSection(0, self.fontMetrics().horizontalAdvance(ID_WIDTH_TEXT) + 16)
+        self.table.setTextElideMode(Qt.TextElideMode.ElideMiddle)
         header.setSectionResizeMode(1, QHeaderView.ResizeMode.Stretch)
         header.setMinimumSectionSize(40)
         self.table.selectionModel().selectionChanged.connect(self._on_table_selection)
@@ -291,6 +300,10 @@ class IlluminantsPage(QWidget):
         self.progress.hide()
         text = (f"{self.model.rowCount()} sources; select several (Ctrl/Shift-click) to compare "
                 "them")
+        clipped = sum(not row.light_in_gamut for row in self.model.rows())
+        if clipped:
+            text += (f"; {CLIPPED_MARK.strip()} after a headset light RGB: clipped, outside the "
+                     f"headset's gamut ({clipped})")
         if self._skipped:
             text += f". Not shown ({len(self._skipped)}): " + "; ".join(self._skipped)
         self.status.setText(text)
