@@ -59,3 +59,18 @@ def test_a_fast_warm_up_is_still_found():
     relative[:3] -= np.array([9.0, 3.0, 1.5]) * SD  # rising, then settled
     result = _result(relative)
     assert result.p_value < LEVEL, result.evidence
+
+
+def test_a_rise_after_the_first_reference_alone_is_not_called_a_step_without_saying_it_may_be_a_warm_up():
+    # one change, between the first two references 500 s apart: a step, or a warm-up that settled
+    # before the second reference; nothing between them tells which, so the form says both
+    relative = np.full(TIMES.size, 1.0)
+    relative[0] = 0.95
+    result = _result(relative)
+    assert result.details["form"].startswith("a step up after the first reference")
+    assert "or a warm-up" in result.details["form"] and "or a warm-up" in result.evidence
+    # the same change later in the session is a step (a display does not warm up halfway)
+    later = np.where(np.arange(TIMES.size) < 6, 0.95, 1.0)
+    assert _result(later).details["form"] == "a step up"
+    # and a fall after the first reference is a step down
+    assert _result(np.where(np.arange(TIMES.size) < 1, 1.05, 1.0)).details["form"] == "a step down"

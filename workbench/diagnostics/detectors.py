@@ -317,7 +317,13 @@ def _drift_form(drift: DriftCorrection, sd: float) -> str:
     if clear.size == 0:
         return "a slow trend"
     if clear.size == 1 and abs(clear[0]) > 0.6 * span:
-        return "a step" + (" up" if clear[0] > 0 else " down")
+        form = "a step" + (" up" if clear[0] > 0 else " down")
+        if clear[0] > 0 and abs(steps[0]) > 2.5 * np.sqrt(2) * sd:
+            # the first two references alone cannot tell a step from a warm-up that settled
+            # between them, and a display's first minutes are when it warms up
+            form += (" after the first reference (or a warm-up that settled before the second: "
+                     "no reference between them to tell)")
+        return form
     if np.all(clear > 0):
         return "a warm-up (rising, then settling)" if np.argmax(steps) < steps.size / 2 else \
             "a rise"
