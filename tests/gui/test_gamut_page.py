@@ -70,3 +70,38 @@ def test_a_bad_profile_overlay_names_the_file(page, tmp_path, monkeypatch):
     bad.write_text("{}")
     page.add_profile_overlay(bad)
     assert len(shown) == 1 and "bad.vrprofile.json" in shown[0]
+
+
+def _legend_rect_in_data(page):
+    """The legend's rectangle in data coordinates (x0, x1, y0, y1)."""
+    from PySide6.QtWidgets import QApplication
+
+    for _ in range(10):
+        QApplication.processEvents()
+    legend, box = page.legend, page.plot.getPlotItem().getViewBox()
+    corners = [box.mapSceneToView(legend.mapToScene(point)) for point in
+               (legend.boundingRect().topLeft(), legend.boundingRect().bottomRight())]
+    xs, ys = sorted(c.x() for c in corners), sorted(c.y() for c in corners)
+    return xs[0], xs[1], ys[0], ys[1]
+
+
+@pytest.mark.parametrize("diagram", ["xy", "u'v'"])
+@pytest.mark.parametrize("size", [(1300, 800), (1366, 680)])  # the page at both window sizes
+def test_the_legend_covers_no_gamut_outline_and_not_the_locus(page, diagram, size):
+    from workbench.gamut import spectral_locus
+
+    page.resize(*size)
+    page.set_diagram(diagram)
+    x0, x1, y0, y1 = _legend_rect_in_data(page)
+    assert x1 - x0 > 0.05 and y1 - y0 > 0.05  # drawn, and somewhere on the plot
+
+    def covered(outline):
+        closed = np.vstack([outline, outline[:1]])
+        t = np.linspace(0.0, 1.0, 50)[:, None]
+        points = np.vstack([a + t * (b - a) for a, b in zip(closed[:-1], closed[1:])])
+        return np.sum((points[:, 0] > x0) & (points[:, 0] < x1) & (points[:, 1] > y0) & (points[:, 1] < y1))
+
+    assert covered(spectral_locus(diagram)[1]) == 0
+    for name in ("sRGB", "DCI-P3", "Rec. 2020"):
+        assert covered(reference_gamut(name).vertices(diagram)) == 0, name
+    assert covered(display_gamut(page.workspace.profile.display_model()).vertices(diagram)) == 0

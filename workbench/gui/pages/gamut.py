@@ -59,6 +59,13 @@ def _closed(points: np.ndarray) -> np.ndarray:
     return np.vstack([points, points[:1]])
 
 
+LEGEND_CORNER = {"xy": (1, 0), "u'v'": (1, 1)}
+"""Where each diagram's legend goes, ``(right, bottom)``: the corner the spectral locus leaves
+empty. In xy that is the top right, above the locus from 540 to 620 nm (at the bottom right the
+legend covered the red corners of every gamut and the line of purples); in u′v′ the bottom right,
+below the line of purples."""
+
+
 class GamutPage(QWidget):
     """The current profile's gamut against sRGB, DCI-P3, Rec. 2020 and other profiles."""
 
@@ -243,6 +250,9 @@ class GamutPage(QWidget):
         limits = (-0.05, 0.8, -0.05, 0.9) if diagram == "xy" else (-0.05, 0.7, -0.05, 0.65)
         self.plot.setXRange(limits[0], limits[1], padding=0)
         self.plot.setYRange(limits[2], limits[3], padding=0)
+        right, bottom = LEGEND_CORNER[diagram]
+        self.legend.anchor(itemPos=(right, bottom), parentPos=(right, bottom),
+                           offset=(-10 if right else 10, -10 if bottom else 10))
 
     def _draw_overlays(self, diagram: str) -> None:
         current = self._gamut.xy
