@@ -312,13 +312,14 @@ def _with_labels_of(labelled: Session, corrected: Session) -> Session:
 def _drift_form(drift: DriftCorrection, sd: float) -> str:
     """warm-up, decline, step or wander, from the steps between successive references."""
     steps = np.diff(drift.gains)
-    clear = steps[np.abs(steps) > 2.5 * np.sqrt(2) * sd]
+    threshold = 2.5 * np.sqrt(2) * sd  # a change between two references beyond their noise
+    clear = steps[np.abs(steps) > threshold]
     span = drift.span
     if clear.size == 0:
         return "a slow trend"
     if clear.size == 1 and abs(clear[0]) > 0.6 * span:
         form = "a step" + (" up" if clear[0] > 0 else " down")
-        if clear[0] > 0 and abs(steps[0]) > 2.5 * np.sqrt(2) * sd:
+        if clear[0] > 0 and abs(steps[0]) > threshold:
             # the first two references alone cannot tell a step from a warm-up that settled
             # between them, and a display's first minutes are when it warms up
             form += (" after the first reference (or a warm-up that settled before the second: "

@@ -40,6 +40,7 @@ from workbench.gamut import (
     to_diagram,
     validation_points,
 )
+from workbench.gui.widgets.plot_view import place_legend
 
 __all__ = ["GamutPage"]
 
@@ -250,9 +251,7 @@ class GamutPage(QWidget):
         limits = (-0.05, 0.8, -0.05, 0.9) if diagram == "xy" else (-0.05, 0.7, -0.05, 0.65)
         self.plot.setXRange(limits[0], limits[1], padding=0)
         self.plot.setYRange(limits[2], limits[3], padding=0)
-        right, bottom = LEGEND_CORNER[diagram]
-        self.legend.anchor(itemPos=(right, bottom), parentPos=(right, bottom),
-                           offset=(-10 if right else 10, -10 if bottom else 10))
+        place_legend(self.legend, *LEGEND_CORNER[diagram], margin=10)
 
     def _draw_overlays(self, diagram: str) -> None:
         current = self._gamut.xy

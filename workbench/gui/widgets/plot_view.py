@@ -11,7 +11,7 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor
 
-__all__ = ["PALETTE", "pen", "brush", "ViewPlot", "configure_plot", "emptiest_corner"]
+__all__ = ["PALETTE", "pen", "brush", "ViewPlot", "configure_plot", "emptiest_corner", "place_legend"]
 
 PALETTE = ("#c0392b", "#27ae60", "#2e6fd0", "#555555", "#e67e22", "#8e44ad")
 """Colours by index: red, green, blue channels, grey, then two more."""
@@ -92,6 +92,13 @@ def emptiest_corner(points: list) -> tuple[int, int]:
     return min(counts, key=counts.get)
 
 
+def place_legend(legend: pg.LegendItem, right: int, bottom: int, margin: float = 5) -> None:
+    """Anchor ``legend`` in a corner of its plot (``right``, ``bottom``: 0 or 1), ``margin``
+    pixels in from both edges."""
+    legend.anchor(itemPos=(right, bottom), parentPos=(right, bottom),
+                  offset=(-margin if right else margin, -margin if bottom else margin))
+
+
 class ViewPlot(pg.PlotWidget):
     """Shows one :class:`PlotView` at a time; a new view re-uses the curves of the last."""
 
@@ -167,8 +174,6 @@ class ViewPlot(pg.PlotWidget):
         for bar in self._bars[bars:]:
             bar.setOpts(x=[], height=[])
         if self._legend is not None:
-            right, bottom = emptiest_corner(drawn)
-            self._legend.anchor(itemPos=(right, bottom), parentPos=(right, bottom),
-                                offset=(-5 if right else 5, -5 if bottom else 5))
+            place_legend(self._legend, *emptiest_corner(drawn))
         plot.getAxis("bottom").setTicks([list(view.x_ticks)] if view.x_ticks else None)
         plot.enableAutoRange()
