@@ -55,3 +55,87 @@ def test_a_long_title_does_not_widen_a_narrow_plot_past_its_cell(qtbot):
     # the data area and its axis stay within the widget, so nothing beside it hides them
     assert plot.getPlotItem().sceneBoundingRect().width() <= plot.width() + 0.5
     assert plot.getPlotItem().titleLabel.item.toPlainText().startswith("chromaticity vs drive")
+
+
+def _under(room, fraction, xs, ys):
+    """Points of (xs, ys) under a legend of ``fraction`` of the plot in ``room``'s corner."""
+    (x0, x1), (y0, y1) = room.x_range, room.y_range
+    right, bottom = room.corner
+    fx, fy = fraction
+    in_x = xs > x1 - fx * (x1 - x0) if right else xs < x0 + fx * (x1 - x0)
+    in_y = ys < y0 + fy * (y1 - y0) - 1e-12 if bottom else ys > y1 - fy * (y1 - y0) + 1e-12
+    return int(np.sum(in_x & in_y))
+
+
+def test_the_legend_gets_room_where_no_quarter_is_empty():
+    from workbench.gui.widgets.plot_view import legend_room
+
+    rng = np.random.default_rng(7)
+    x = np.arange(5.0, 256.0, 5.0)
+    scatter = [(x, rng.normal(0.0, 0.1, x.size)), (x, rng.normal(0.0, 0.1, x.size))]
+    xs, ys = np.concatenate([x, x]), np.concatenate([y for _, y in scatter])
+    growths = []
+    for fraction in ((0.5, 0.3), (0.3, 0.2), (0.8, 0.45)):
+        room = legend_room(scatter, fraction)
+        assert _under(room, fraction, xs, ys) == 0
+        assert room.y_range[0] <= ys.min() and room.y_range[1] >= ys.max()
+        growths.append(room.growth)
+    assert max(growths) > 0.1  # the scatter fills every quarter: room was made for the legends
+    # a tone curve leaves the top left empty: no room needed, and the legend goes there
+    room = legend_room([(DRIVE * 255, DRIVE ** 2.2)], (0.4, 0.3))
+    assert room.corner == (0, 0) and room.growth == 0
+    # a legend as tall as the plot cannot be given room without hiding the data: none
+    assert legend_room(scatter, (0.9, 0.8)) is None
+    assert legend_room([], (0.3, 0.3)) is None
+
+
+@pytest.mark.parametrize("size", [(230, 175), (420, 300)])  # a 1366 × 768 screen's cell, and larger
+def test_the_legend_covers_no_point_of_a_scatter(qtbot, size):
+    from PySide6.QtWidgets import QApplication
+
+    plot = ViewPlot()
+    qtbot.addWidget(plot)
+    plot.resize(*size)
+    plot.show()
+    rng = np.random.default_rng(3)
+    x = np.arange(5.0, 256.0, 5.0)
+    view = PlotView("blue residuals", "DAC", "residual, % of full drive",
+                    (Series("baseline", x, rng.normal(0, 0.1, x.size), 3),
+                     Series("extended", x, rng.normal(0, 0.1, x.size), 2)))
+    plot.show_view(view)
+    qtbot.wait(50)
+    for _ in range(5):
+        QApplication.processEvents()
+    box, legend = plot.getPlotItem().getViewBox(), plot._legend
+    corners = [box.mapSceneToView(legend.mapToScene(point))
+               for point in (legend.boundingRect().topLeft(), legend.boundingRect().bottomRight())]
+    (x0, x1), (y0, y1) = sorted(c.x() for c in corners), sorted(c.y() for c in corners)
+    assert x1 - x0 > 10 and y1 - y0 > 0.01  # drawn, on the plot
+    for series in view.series:
+        covered = (series.x > x0) & (series.x < x1) & (series.y > y0) & (series.y < y1)
+        assert not covered.any(), series.name
+    # its rows are as tall as their 8-point labels, not pyqtgraph's 20-pixel samples
+    assert legend.boundingRect().height() <= 2 * 16
+
+
+def test_a_resize_makes_room_again_but_keeps_a_range_the_user_chose(qtbot):
+    plot = ViewPlot()
+    qtbot.addWidget(plot)
+    plot.resize(420, 300)
+    plot.show()
+    rng = np.random.default_rng(5)
+    x = np.arange(5.0, 256.0, 5.0)
+    plot.show_view(PlotView("residuals", "DAC", "residual", (Series("baseline", x, rng.normal(0, 0.1, x.size), 3),
+                                                            Series("extended", x, rng.normal(0, 0.1, x.size), 2))))
+    qtbot.wait(50)
+    box = plot.getPlotItem().getViewBox()
+    large = box.viewRange()[1]
+    plot.resize(240, 180)  # the legend takes a larger share of a smaller plot: more room
+    qtbot.wait(50)
+    small = box.viewRange()[1]
+    assert small[1] - small[0] > large[1] - large[0]
+    box.setRange(xRange=(50, 100), yRange=(-0.05, 0.05), padding=0)
+    box.sigRangeChangedManually.emit([True, True])  # as a pan or a zoom with the mouse does
+    plot.resize(420, 300)
+    qtbot.wait(50)
+    assert np.allclose(box.viewRange()[1], (-0.05, 0.05))

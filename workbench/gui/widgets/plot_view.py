@@ -6,12 +6,15 @@ only ``setData`` them; pens and brushes are made once per colour.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor
 
-__all__ = ["PALETTE", "pen", "brush", "ViewPlot", "configure_plot", "emptiest_corner", "place_legend"]
+__all__ = ["PALETTE", "pen", "brush", "ViewPlot", "configure_plot", "emptiest_corner", "place_legend",
+           "LegendRoom", "legend_room", "MAX_LEGEND_ROOM"]
 
 PALETTE = ("#c0392b", "#27ae60", "#2e6fd0", "#555555", "#e67e22", "#8e44ad")
 """Colours by index: red, green, blue channels, grey, then two more."""
@@ -78,18 +81,91 @@ def emptiest_corner(points: list) -> tuple[int, int]:
     bottom right (the order ``counts`` is filled in). The legend goes there, so it covers as
     little of the data as it can.
     """
+    xs, ys = _finite(points)
+    if xs.size == 0:
+        return 0, 0
+    counts = _quarter_counts(xs, ys)
+    return min(counts, key=counts.get)
+
+
+def _finite(points: list) -> tuple[np.ndarray, np.ndarray]:
+    """Every series' finite points, as two flat arrays."""
     xs = np.concatenate([np.asarray(x, float).ravel() for x, _ in points] or [np.zeros(0)])
     ys = np.concatenate([np.asarray(y, float).ravel() for _, y in points] or [np.zeros(0)])
     finite = np.isfinite(xs) & np.isfinite(ys)
-    xs, ys = xs[finite], ys[finite]
-    if xs.size == 0:
-        return 0, 0
+    return xs[finite], ys[finite]
+
+
+def _quarter_counts(xs: np.ndarray, ys: np.ndarray) -> dict:
+    """Points in each quarter of their range, by ``(right, bottom)``, filled in the order top
+    left, top right, bottom left, bottom right."""
     x_mid = 0.5 * (xs.min() + xs.max())
     y_mid = 0.5 * (ys.min() + ys.max())
-    counts = {(right, bottom): int(np.sum(((xs > x_mid) == bool(right))
-                                          & ((ys < y_mid) == bool(bottom))))
-              for bottom in (0, 1) for right in (0, 1)}
-    return min(counts, key=counts.get)
+    return {(right, bottom): int(np.sum(((xs > x_mid) == bool(right)) & ((ys < y_mid) == bool(bottom))))
+            for bottom in (0, 1) for right in (0, 1)}
+
+
+MAX_LEGEND_ROOM = 1.0
+"""The most a plot's y range grows (as a share of the data's own) to clear its legend; a legend
+that needs more is larger than the plot can give it, and goes where the fewest points are."""
+
+
+@dataclass(frozen=True)
+class LegendRoom:
+    """Where a plot's legend goes and the ranges that keep the data out from under it."""
+
+    corner: tuple[int, int]  # (right, bottom), 0 or 1, as :func:`place_legend` takes it
+    x_range: tuple[float, float]
+    y_range: tuple[float, float]
+    growth: float  # how much the y range grew for it, as a share of the data's padded range
+
+
+def _padded(values: np.ndarray, pad: float) -> tuple[float, float]:
+    low, high = float(values.min()), float(values.max())
+    span = high - low
+    if span <= 0:
+        span = abs(low) * 0.1 or 1.0
+        return low - span / 2, high + span / 2
+    return low - pad * span, high + pad * span
+
+
+def legend_room(points: list, fraction: tuple[float, float], pad: float = 0.04) -> LegendRoom | None:
+    """The corner whose legend needs the least extra y range to cover none of ``points``, and the ranges.
+
+    ``points``: (x, y) arrays in data coordinates (y up), every point a series draws, lines
+    sampled along their length. ``fraction``: the legend's width and height (with its margin) as
+    shares of the data area's. The x range is the data's, padded by ``pad`` of its span each side;
+    the y range too, then widened on the legend's side until every point under the legend's
+    columns lies below (or above) it. The corner needing the least growth wins; of equals, the
+    quarter with the fewest points (:func:`emptiest_corner`'s order). None where there are no
+    points, or where even the best corner needs more than :data:`MAX_LEGEND_ROOM` (the legend
+    does not fit).
+
+    Autoranged, pyqtgraph draws the data edge to edge, and a legend anchored in the emptiest
+    quarter still covered points wherever no quarter was empty (the residual plots' scatter, the
+    sweeps' curves under a four-entry legend on a 1366 × 768 screen).
+    """
+    xs, ys = _finite(points)
+    fx, fy = fraction
+    if xs.size == 0 or not (0 < fx < 1 and 0 < fy < 1):
+        return None
+    x0, x1 = _padded(xs, pad)
+    y0, y1 = _padded(ys, pad)
+    best = None
+    # the quarters with the fewest points first (a stable sort keeps top left, top right, bottom
+    # left, bottom right among equals): a tie in growth goes to the emptier quarter
+    for (right, bottom), _ in sorted(_quarter_counts(xs, ys).items(), key=lambda item: item[1]):
+        edge = x1 - fx * (x1 - x0) if right else x0 + fx * (x1 - x0)
+        under = ys[(xs >= edge) if right else (xs <= edge)]
+        low, high = y0, y1
+        if under.size and not bottom:  # the legend's lower edge, y1 - fy (y1 - y0), above them all
+            high = max(y1, (float(under.max()) - fy * y0) / (1 - fy))
+        elif under.size:  # its upper edge, y0 + fy (y1 - y0), below them all
+            low = min(y0, (float(under.min()) - fy * y1) / (1 - fy))
+        growth = (high - low) / (y1 - y0) - 1.0
+        if best is None or growth < best.growth - 1e-9:
+            best = LegendRoom((right, bottom), (x0, x1), (low, high), growth)
+    return best if best.growth <= MAX_LEGEND_ROOM else None
 
 
 def place_legend(legend: pg.LegendItem, right: int, bottom: int, margin: float = 5) -> None:
@@ -97,6 +173,31 @@ def place_legend(legend: pg.LegendItem, right: int, bottom: int, margin: float =
     pixels in from both edges."""
     legend.anchor(itemPos=(right, bottom), parentPos=(right, bottom),
                   offset=(-margin if right else margin, -margin if bottom else margin))
+
+
+class _CompactSample(pg.ItemSample):
+    """A legend entry's sample in a row as tall as its 8-point label: pyqtgraph's is 20 pixels
+    square, and four entries filled most of a small plot's height."""
+
+    HEIGHT = 14
+
+    def __init__(self, item):
+        super().__init__(item)
+        self.setFixedHeight(self.HEIGHT)
+
+    def boundingRect(self):
+        return pg.QtCore.QRectF(0, 0, 20, self.HEIGHT)
+
+    def paint(self, p, *args):
+        p.translate(0, self.HEIGHT / 2 - 10)  # pyqtgraph draws the sample about y = 10
+        super().paint(p, *args)
+
+
+def _compact(label: pg.LabelItem) -> None:
+    """A legend label without the text document's 4-pixel margin round it."""
+    label.item.document().setDocumentMargin(0)
+    label.setText(label.text)  # sizes it again
+    label.setMaximumHeight(label.minimumHeight())
 
 
 class ViewPlot(pg.PlotWidget):
@@ -113,9 +214,18 @@ class ViewPlot(pg.PlotWidget):
         self._curves: list = []
         self._bars: list = []
         self._legend = item.addLegend(
-            offset=(5, 5), labelTextSize="8pt", brush=None)  if legend else None
+            offset=(5, 5), labelTextSize="8pt", brush=None, sampleType=_CompactSample) if legend else None
+        if self._legend is not None:
+            # no box is drawn round it, so its margins only took room from the data
+            self._legend.layout.setContentsMargins(0, 0, 0, 0)
         self._empty = pg.TextItem("", color="#777", anchor=(0.5, 0.5))
         self.getPlotItem().addItem(self._empty, ignoreBounds=True)
+        self._room_points: list | None = None  # what the legend must not cover, as last drawn
+        # the legend's share of the plot changes with the plot's size: its room with it, until
+        # the user pans or zooms (their range is kept)
+        box = self.getPlotItem().getViewBox()
+        box.sigResized.connect(self._fit_range)
+        box.sigRangeChangedManually.connect(self._keep_users_range)
 
     def _curve(self, i: int):
         while len(self._curves) <= i:
@@ -140,6 +250,7 @@ class ViewPlot(pg.PlotWidget):
                 bar.setOpts(x=[], height=[])
             self._empty.setText(empty_text)
             self._empty.setPos(0.5, 0.5)
+            self._room_points = None
             plot.setXRange(0, 1)
             plot.setYRange(0, 1)
             if self._legend is not None:
@@ -154,13 +265,16 @@ class ViewPlot(pg.PlotWidget):
         for i, series in enumerate(view.series):
             curve = self._curve(i)
             x, y = np.asarray(series.x, float), np.asarray(series.y, float)
-            drawn.append((x, y))
+            drawn.append(_along(x, y) if not (series.points or series.bars) else (x, y))
             if series.bars:
                 bottom = min(0.0, float(y.min())) if len(y) and float(y.min()) < 50 else 0.9 * float(y.min())
                 self._bar(bars).setOpts(x=x, height=y - bottom, y0=bottom, width=0.6, brush=brush(series.colour, 170),
                                         pen=pen(series.colour, 1))
                 bars += 1
                 curve.setData([], [])
+                # a bar covers its width from its bottom to its top
+                drawn[-1] = (np.concatenate([x - 0.3, x + 0.3] * 2),
+                             np.concatenate([y, y, np.full(y.size, bottom), np.full(y.size, bottom)]))
                 continue
             if series.points:
                 curve.setData(x, y, pen=None, symbol="o", symbolSize=5, symbolPen=pen(series.colour, 1),
@@ -169,11 +283,52 @@ class ViewPlot(pg.PlotWidget):
                 curve.setData(x, y, pen=pen(series.colour, 1.8, dashed=series.colour == 3), symbol=None)
             if self._legend is not None:
                 self._legend.addItem(curve, series.name)
+                _compact(self._legend.items[-1][1])
+                self._legend.layout.activate()
+                self._legend.updateSize()
         for curve in self._curves[len(view.series):]:
             curve.setData([], [])
         for bar in self._bars[bars:]:
             bar.setOpts(x=[], height=[])
-        if self._legend is not None:
-            place_legend(self._legend, *emptiest_corner(drawn))
         plot.getAxis("bottom").setTicks([list(view.x_ticks)] if view.x_ticks else None)
-        plot.enableAutoRange()
+        self._room_points = drawn
+        self._fit_range()
+
+    def _keep_users_range(self, *_) -> None:
+        self._room_points = None
+
+    def _fit_range(self, *_) -> None:
+        """The data's range with room for the legend in the corner that needs the least
+        (:func:`legend_room`), or autoranged with the legend where the fewest points are."""
+        if self._room_points is None:
+            return
+        box = self.getPlotItem().getViewBox()
+        room = None
+        if self._legend is not None and self._legend.items and box.width() > 0 and box.height() > 0:
+            size = self._legend.boundingRect()
+            clearance = LEGEND_MARGIN + SYMBOL_RADIUS
+            room = legend_room(self._room_points, ((size.width() + clearance) / box.width(),
+                                                   (size.height() + clearance) / box.height()))
+        if room is None:
+            box.enableAutoRange()
+            corner = emptiest_corner(self._room_points)
+        else:
+            box.setRange(xRange=room.x_range, yRange=room.y_range, padding=0)
+            corner = room.corner
+        if self._legend is not None:
+            place_legend(self._legend, *corner, margin=LEGEND_MARGIN)
+
+
+LEGEND_MARGIN = 5
+"""Pixels between a plot's legend and the edges of its data area."""
+SYMBOL_RADIUS = 4
+"""Pixels a point's symbol reaches beyond the point (5-pixel symbols, with their outline)."""
+
+
+def _along(x: np.ndarray, y: np.ndarray, samples: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """A line's points along its length where ``x`` rises (a curve over drive or time): the
+    legend must clear the segments between the vertices, not only the vertices."""
+    if x.size < 2 or not np.all(np.diff(x) >= 0):
+        return x, y
+    along = np.linspace(x[0], x[-1], samples)
+    return np.concatenate([x, along]), np.concatenate([y, np.interp(along, x, y)])
