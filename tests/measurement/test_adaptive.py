@@ -40,7 +40,7 @@ from workbench.measurement.simulation import ModelledSessionClock
 from .conftest import RecordingDisplay, ScriptedMeter
 
 SEED = 11
-SETTINGS = AdaptiveSettings(seed=SEED, budget_min=18.0, validation=6, floor_dE00_per_min=0.002)
+SETTINGS = AdaptiveSettings(seed=SEED, budget_min=19.0, validation=6, floor_dE00_per_min=0.002)
 EFFECTS = {"channel-interaction": 0.1}
 
 
@@ -129,7 +129,7 @@ def test_an_interaction_gets_greys_and_mixtures(whole):
 def test_the_first_decision_reads_each_primary_again(whole):
     first = whole.decisions[0]
     assert first["action"] == "primaries" and "column of the matrix" in first["reason"]
-    assert [tuple(p[1:4]) for p in first["patches"]] == [(255, 0, 0), (0, 255, 0), (0, 0, 255)] * 2
+    assert [tuple(p[1:4]) for p in first["patches"]] == [(255, 0, 0), (0, 255, 0), (0, 0, 255)] * (PRIMARY_READINGS - 1)
     readings = Counter(tuple(r.rgb) for r in whole.records if r.ok and r.kind != "validation")
     assert all(readings[p] == PRIMARY_READINGS for p in ((255, 0, 0), (0, 255, 0), (0, 0, 255)))
     assert sum(d["action"] == "primaries" for d in whole.decisions) == 1
@@ -152,8 +152,10 @@ def test_drift_references_by_elapsed_time(whole):
 
 
 def test_the_validation_colours_carry_drift_references():
-    """A white each DRIFT_REFERENCE_INTERVAL_S of the validation colours' predicted time, and a
-    last white: the validation colours are corrected for drift as the fit rows are."""
+    """A white each DRIFT_REFERENCE_INTERVAL_S of the validation colours' predicted time, and two
+    last whites one after the other: the validation colours are corrected for drift as the fit rows
+    are, and the drift correction's reference state (the mean of the last two whites) is one
+    moment, the session's end, not two a minute apart."""
     validation = validation_patches(SEED, 30)
     dark = {p.rgb for p in validation[5:7]}  # two dark ones, a minute each
 
@@ -162,13 +164,13 @@ def test_the_validation_colours_carry_drift_references():
 
     closing = _with_drift_references(validation, seconds)
     assert [p for p in closing if p.kind == "validation"] == list(validation)
-    assert closing[-1].kind == "white" and sum(p.kind == "white" for p in closing) >= 4
+    assert [p.kind for p in closing[-3:]] == ["validation", "white", "white"]
+    assert sum(p.kind == "white" for p in closing) >= 5
     since = 0.0
     for patch in closing:
         since = 0.0 if patch.kind == "white" else since + seconds([patch])
         assert since <= DRIFT_REFERENCE_INTERVAL_S or seconds([patch]) >= DRIFT_REFERENCE_INTERVAL_S
-    assert _with_drift_references(validation[:3], seconds)[-1].kind == "white"
-    assert sum(p.kind == "white" for p in _with_drift_references(validation[:3], seconds)) == 1
+    assert [p.kind for p in _with_drift_references(validation[:3], seconds)] == ["validation"] * 3 + ["white"] * 2
 
 
 def test_resume_after_a_crash_reproduces_the_decisions(whole, tmp_path):
@@ -197,7 +199,7 @@ def test_validation_colours_are_never_read(whole):
     # the validation colours come only with the stop, last
     for d in whole.decisions[:-1]:
         assert all(p[0] != "validation" for p in d["patches"])
-    assert [p[0] for p in whole.decisions[-1]["patches"]][:-1] == ["validation"] * SETTINGS.validation
+    assert [p[0] for p in whole.decisions[-1]["patches"]][:-2] == ["validation"] * SETTINGS.validation
     # and their measurements change nothing: with them replaced by nonsense, every decision replays
     nonsense = tuple(replace(r, XYZ=(1e3, 1e-3, 5e2), Lv=1e-3, duration_s=r.duration_s)
                      if r.kind == "validation" else r for r in whole.records)
