@@ -362,3 +362,20 @@ def test_on_a_clean_display_the_paper_plan_is_predicted_as_the_surrogate_does():
     model, display, paper = _core_model({}, 0)
     surrogate = np.maximum(model.predict(paper)[:, 1], 0.0)
     assert np.allclose(paper_luminance(model, paper), surrogate, rtol=0.05, atol=1e-3)
+
+
+def test_with_a_budget_the_primaries_are_read_as_often_as_it_leaves_room_for():
+    """With ``--budget-min`` the further readings are held to the budget as the time cap holds them
+    without one: as many as leave room for the validation colours and their whites, not six or
+    none."""
+    planner = AdaptivePlanner(AdaptiveSettings(seed=SEED, budget_min=5.0, validation=6))
+
+    def seconds(patches):
+        return 10.0 * len(patches)
+
+    closing = _with_drift_references(planner.validation, seconds)  # six colours, two whites: 80 s
+    assert seconds(closing) == 80.0
+    assert planner._repeats_fit(seconds, 300.0 - 80.0, None)
+    assert not planner._repeats_fit(seconds, 300.0 - 79.0, None)
+    # without a budget or a predicted paper plan, nothing holds them back
+    assert AdaptivePlanner(AdaptiveSettings(seed=SEED, validation=6))._repeats_fit(seconds, 1e6, None)

@@ -561,7 +561,8 @@ class AdaptivePlanner:
         if self.settings.budget_min is None and not decisions:
             paper = np.array([p.rgb for p in measurement_plan_paper(self.settings.seed).patches], dtype=float)
             paper_s = float(cost.seconds(paper_luminance(model, paper)).sum())
-        # the primaries' further readings: at the first decision, where the cap leaves room
+        # the primaries' further readings: at the first decision, as many as the cap (or the
+        # budget) leaves room for
         repeats, repeats_s, readings = [], 0.0, 1
         for readings in range(PRIMARY_READINGS, 1, -1) if not decisions else ():
             repeats = self._primary_repeats(records, readings)
@@ -722,10 +723,13 @@ class AdaptivePlanner:
     def _repeats_fit(self, seconds, elapsed: float, paper_s) -> bool:
         """Whether a session that has measured ``elapsed`` seconds (the core and the primaries'
         readings) still holds the fewest validation colours and a last white within the time
-        cap (:data:`TIME_CAP_SHARE`; with ``--budget-min`` the budget decides, in
-        :meth:`decide`)."""
+        cap (:data:`TIME_CAP_SHARE`), or, with ``--budget-min``, the validation colours and their
+        whites within the budget."""
         if paper_s is None:
-            return True
+            if self.settings.budget_min is None:
+                return True
+            closing = _with_drift_references(self.validation, seconds)
+            return elapsed + seconds(closing) <= 60.0 * float(self.settings.budget_min)
         fewest = self.validation[:min(MIN_VALIDATION, self.settings.validation)]
         costs = [seconds([p]) for p in fewest]
         return _within_cap(elapsed, seconds([Patch("white", _WHITE)]), costs, paper_s) == len(fewest)
