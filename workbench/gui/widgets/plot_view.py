@@ -78,8 +78,9 @@ def emptiest_corner(points: list) -> tuple[int, int]:
 
     ``points``: (x, y) arrays of every series, in data coordinates (y up). Each is placed within
     the range of all of them; a quarter wins ties in the order top left, top right, bottom left,
-    bottom right (the order ``counts`` is filled in). The legend goes there, so it covers as
-    little of the data as it can.
+    bottom right (the order :func:`_quarter_counts` fills them in). A legend too large for its
+    plot to make room for (:func:`legend_room`) goes there, so it covers as little of the data as
+    it can; :func:`legend_room` breaks its own ties by it.
     """
     xs, ys = _finite(points)
     if xs.size == 0:
