@@ -291,8 +291,11 @@ def test_no_fold_holds_every_white():
 
 def test_validation_count_keeps_the_session_within_the_cap():
     costs = [10.0] * 30
-    # 100 s of core, a 5 s white: a cap of 330 s leaves room for 22 colours
-    assert validation_count(30, 100.0, 5.0, costs, 1000.0) == int((TIME_CAP_SHARE * 1000 - 105) // 10)
+    # 100 s of core, 5 s whites: a cap of 330 s leaves room for 20 colours, with the two last whites
+    # and the three among them (one before every seventh colour: 10 s each, a white each 60 s) — 22
+    # when only one last white was counted, and the session passed the cap by the others
+    assert validation_count(30, 100.0, 5.0, costs, 1000.0) == 20
+    assert 100.0 + 5 * (2 + 3) + 10 * 20 <= TIME_CAP_SHARE * 1000 < 100.0 + 5 * (2 + 3) + 10 * 21
     assert validation_count(30, 100.0, 5.0, costs, 10_000.0) == 30  # room for all: all
     assert validation_count(30, 400.0, 5.0, costs, 1000.0) == MIN_VALIDATION  # never fewer
     assert validation_count(5, 400.0, 5.0, costs, 1000.0) == 5  # unless fewer were asked for
