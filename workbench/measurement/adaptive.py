@@ -239,15 +239,24 @@ def _with_drift_references(validation, seconds) -> tuple:
     (0.058 → 0.762; with the pair 0.029). The largest with it is a power limit of seed 43001
     whose cross-validated model choice one more white row tipped from the extension (0.048) to
     the grey ramp with sweeps (0.273)."""
-    out, since = [], 0.0
-    for patch in validation:
-        cost = seconds([patch])
-        if out and since + cost > DRIFT_REFERENCE_INTERVAL_S:
+    out = []
+    for patch, white in zip(validation, _white_before([seconds([p]) for p in validation])):
+        if white:
             out.append(Patch("white", _WHITE))
-            since = 0.0
         out.append(patch)
-        since += cost
     return tuple(out) + (Patch("white", _WHITE),) * 2
+
+
+def _white_before(costs) -> np.ndarray:
+    """Whether a white comes before each of the colours costing ``costs`` (in order): where it would
+    take :data:`DRIFT_REFERENCE_INTERVAL_S` of their time since the last white past it (never before
+    the first: the planner's own reference precedes it)."""
+    before, since = [], 0.0
+    for n, cost in enumerate(costs):
+        white = bool(n) and since + cost > DRIFT_REFERENCE_INTERVAL_S
+        since = (0.0 if white else since) + cost
+        before.append(white)
+    return np.array(before, dtype=bool)
 
 
 def _within_cap(elapsed_s: float, white_s: float, costs_s, paper_s: float) -> int:
@@ -263,13 +272,7 @@ def _within_cap(elapsed_s: float, white_s: float, costs_s, paper_s: float) -> in
 def _whites_among(costs: np.ndarray) -> np.ndarray:
     """The whites :func:`_with_drift_references` puts among the first ``n`` colours costing
     ``costs`` (in order), for ``n`` = 0 … ``len(costs)``."""
-    counts, among, since = [0], 0, 0.0
-    for n, cost in enumerate(costs):
-        if n and since + cost > DRIFT_REFERENCE_INTERVAL_S:
-            among, since = among + 1, 0.0
-        since += cost
-        counts.append(among)
-    return np.array(counts)
+    return np.concatenate([[0], np.cumsum(_white_before(costs))]).astype(int)
 
 
 def adaptive_core_plan(seed: int) -> MeasurementPlan:
