@@ -285,8 +285,9 @@ class ViewPlot(pg.PlotWidget):
             if self._legend is not None:
                 self._legend.addItem(curve, series.name)
                 _compact(self._legend.items[-1][1])
-                self._legend.layout.activate()
-                self._legend.updateSize()
+        if self._legend is not None:  # its size from the compacted rows, once they are all in
+            self._legend.layout.activate()
+            self._legend.updateSize()
         for curve in self._curves[len(view.series):]:
             curve.setData([], [])
         for bar in self._bars[bars:]:
