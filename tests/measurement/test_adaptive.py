@@ -223,6 +223,26 @@ def test_patch_cost_comes_from_the_session():
     assert "countdown" in model.describe()
 
 
+def test_a_patch_that_reads_no_light_costs_what_the_black_did():
+    # a toe crushes grey 8 to black: it reads no light and takes the instrument's limit, as the
+    # black does. Taken for the darkest lit patch (at the luminance floor) it drew the cost of
+    # everything darker than the darkest lit one on a line to it: a sweep point the toe also
+    # crushes was predicted at a minute, not four, and the paper plan's time 32 min, not 46
+    # (it took 55 on the plans bench's toe of seed 43003)
+    records = [SimpleNamespace(ok=True, Lv=L, duration_s=d, measurement_time_s=None, rgb=rgb)
+               for L, d, rgb in ((0.0002, 252.0, (0, 0, 0)), (165.0, 3.0, (255, 255, 255)),
+                                 (-0.0002, 252.0, (8, 8, 8)), (0.6, 20.4, (0, 0, 32)),
+                                 (0.94, 17.0, (0, 0, 64)), (1.34, 14.7, (0, 0, 96)),
+                                 (2.26, 12.3, (16, 16, 16)))]
+    seconds = fit_patch_cost(records).seconds([2.26, 0.1, 0.001, 0.0])
+    assert seconds[0] == pytest.approx(12.3)
+    assert 20.4 < seconds[1] < 252.0  # the darkest lit patches' slope, not the floor's
+    assert seconds[2] == pytest.approx(252.0) and seconds[3] == pytest.approx(252.0)
+    # its reading's noise may put it a little above the black's: its time says the same
+    records[2].Lv = 0.0003
+    assert fit_patch_cost(records).seconds([0.001])[0] == pytest.approx(252.0)
+
+
 def test_measure_cli_adaptive(tmp_path, capsys):
     out = tmp_path / "session"
     code = main(["measure", "--simulate", "--plan", "adaptive", "--seed", "4", "--budget-min", "16",

@@ -16,7 +16,11 @@ monotone (a darker patch never costs less than a brighter one measured);
 darker than the darkest lit patch measured it follows the slope of the darkest
 measured points (integration time grows as a power of the signal), never past
 the seconds the black took; brighter than the brightest, the brightest's
-seconds. Where every record carries the announced countdown, the cost is the
+seconds. A patch that reads no more light than the black, or took as long
+(a toe crushes the shadows to black), is a point of the floor, as the black
+is, not the darkest lit one: read at the floor's luminance, a line from it to
+the darkest lit patch had put what a toe crushes at a minute where it takes
+four. Where every record carries the announced countdown, the cost is the
 countdown's curve plus the curve of the rest (``duration_s − ttt``:
 pre-measurement and transfer), each fitted that way.
 
@@ -123,6 +127,12 @@ def fit_patch_cost(records) -> PatchCostModel | None:
     luminance = np.array([r.Lv for r in records])
     duration = np.array([r.duration_s for r in records])
     black = np.array([not any(r.rgb) for r in records])
+    if black.any():
+        # a patch that reads no more light than the black, or took as long (a toe's crushed
+        # shadows: the instrument's limit, its reading noise about zero), is a point of the
+        # floor, not the darkest lit one
+        black |= ((luminance <= max(0.0, float(luminance[black].max())))
+                  | (duration >= duration[black].max()))
     announced = [r.measurement_time_s for r in records]
     if all(a is not None for a in announced):
         countdown = np.array(announced, dtype=float)
