@@ -400,3 +400,24 @@ def test_beside_a_drift_the_sweep_correction_needs_a_found_interaction_or_mixtur
     else:
         assert choice.chosen == "grey-ramp", choice.reason
         assert "the drift correction's residual" in choice.reason
+
+
+@pytest.mark.parametrize("sparse, mixtures, taken", [(True, 40, False), (True, 0, True),
+                                                      (False, 40, True)])
+def test_between_sparse_sweeps_the_grey_ramp_must_predict_the_mixtures_no_worse_than_the_extension(
+        given_errors, monkeypatch, sparse, mixtures, taken):
+    """Between sparse sweeps (the adaptive plan) the grey ramp's gain over the extension may be at
+    the whites and greys of its own ramp: where the fit rows hold mixtures (the rows a validation
+    colour is) it must predict them no worse, as the sweep correction must. Along dense sweeps the
+    authors' method needs only to predict better, as before."""
+    monkeypatch.setattr(model_choice, "has_sparse_sweep", lambda context: sparse)
+    rng = np.random.default_rng(31)
+    counts = (30, 20, 4, mixtures)
+    extension = _errors(rng, 0.30, 0.30, 0.30, 0.30, counts)
+    given_errors["grey-ramp"] = _errors(rng, 0.27, 0.24, 0.20, 0.32, counts)
+    given_errors["grey-ramp+sweeps"] = _errors(rng, 0.60, 0.60, 0.60, 0.60, counts)
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=True,
+                                       found=("temporal-drift",), extension_terms=("temporal-drift",))
+    assert (choice.chosen == "grey-ramp") is taken, choice.reason
+    if not taken:
+        assert f"predicts the {mixtures} mixtures worse" in choice.reason
