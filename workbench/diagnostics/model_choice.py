@@ -495,11 +495,11 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     sparse sweeps: beside a drift in the model (where it is not scored with the greys apart) its
     gain can be at the whites and greys its own ramp passes through, and on a decline of
     ``bench plans`` it won by 0.005 ± 0.018 while it predicted the 13 mixtures 0.012 ± 0.008
-    worse, and scored 0.042 ΔE00 on hidden colours where the extension scores 0.024. Where they hold fewer, a grey-ramp candidate
-    that predicts the fit rows as well as the extension within noise replaces it where
-    it predicts the greys better by :data:`GREYS_TIE_Z` standard errors (``_greys_only``):
-    the greys are then the only rows that light several channels, as a validation colour
-    does, while the extension's
+    worse, and scored 0.042 ΔE00 on hidden colours where the extension scores 0.024.
+    Where they hold fewer, a grey-ramp candidate that predicts the fit rows as well as the
+    extension within noise replaces it where it predicts the greys better by
+    :data:`GREYS_TIE_Z` standard errors (``_greys_only``): the greys are then the only rows
+    that light several channels, as a validation colour does, while the extension's
     gain is on the single-channel sweeps its tone curves are fitted to. Its smoothed
     tone curves (:func:`~workbench.display.tone_curves.smoothed_points`) predicted
     the sweeps of a real LCD chart with no mixtures among its fit rows (87 greys) far
