@@ -128,14 +128,15 @@ last two whites, so that the bench's truth (the display in the state of the last
 was halfway through the step and the fit rows all before it; the stop's two last whites one
 after the other (:func:`_with_drift_references`) mend it, and with them the plan as it is
 missed on 31 (3, 11, 5 and 12), mean hidden ΔE00 0.0613, 0.0828, 0.0809 and 0.0759, at most
-34.1 % (33.7 % since the time cap counts every white, :data:`TIME_CAP_SHARE`). Nine readings: 13 misses on seeds 43001–43004, the time going from the decisions. Taken
-all or none (one reading where six did not fit) the misses were the same on seeds 43001–43004;
-as many as fit is what a short session can afford, and on a lit black's short session it costs
-validation colours (22–28 → 12–18 on the bench's black offsets, the 95 % interval of their mean
-widening with them). Read inside the
-core itself (at the start, the middle and the end of each sweep) three readings missed on 5 and
-14 displays of the first two sets, but where every patch costs the same the core and the fewest
-validation colours then passed the cap (35.5 % of the paper plan's time)."""
+34.1 % (33.7 % since the time cap counts every white, :data:`TIME_CAP_SHARE`). Nine readings:
+13 misses on seeds 43001–43004, the time going from the decisions. Taken all or none (one
+reading where six did not fit) the misses were the same on seeds 43001–43004; as many as fit is
+what a short session can afford, and on a lit black's short session it costs validation colours
+(22–28 → 12–18 on the bench's black offsets, the 95 % interval of their mean widening with
+them). Read inside the core itself (at the start, the middle and the end of each sweep) three
+readings missed on 5 and 14 displays of the first two sets, but where every patch costs the same
+the core and the fewest validation colours then passed the cap (35.5 % of the paper plan's
+time)."""
 
 DRIFT_REFERENCE_INTERVAL_S = 60.0
 """A white is measured once this much session time has passed since the last one. A white costs a
