@@ -421,3 +421,33 @@ def test_between_sparse_sweeps_the_grey_ramp_must_predict_the_mixtures_no_worse_
     assert (choice.chosen == "grey-ramp") is taken, choice.reason
     if not taken:
         assert f"predicts the {mixtures} mixtures worse" in choice.reason
+
+
+@pytest.mark.parametrize("others_loss, terms, taken",
+                         [(0.0, ("channel-interaction",), True),
+                          (0.05, ("channel-interaction",), False),
+                          (0.0, ("tone-curve-shape",), False)])
+def test_an_identified_power_limit_that_loses_only_at_the_whites_is_taken(
+        given_errors, others_loss, terms, taken):
+    """The mirror of a grey-ramp gain at the whites alone: against an extension whose
+    interaction term is fitted to the white references, an identified power limit that
+    predicts the fit rows worse beyond noise only there, the sweeps and greys within noise, is
+    the cause's model and is taken; worse on those other rows beyond noise, or against an
+    extension without the interaction's term, it is not."""
+    rng = np.random.default_rng(41)
+    counts = (30, 20, 4, 0)
+    extension = _errors(rng, 0.30, 0.30, 0.30, 0.0, counts)
+    given_errors["power-limit"] = _errors(rng, 0.30 + others_loss, 0.30 + others_loss, 0.60,
+                                          0.0, counts)
+    given_errors["grey-ramp"] = _errors(rng, 0.90, 0.90, 0.90, 0.0, counts)
+    given_errors["grey-ramp+sweeps"] = _errors(rng, 0.90, 0.90, 0.90, 0.0, counts)
+    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False,
+                                       power_limit=True, found=("channel-interaction",),
+                                       extension_terms=terms)
+    assert (choice.chosen == "power-limit") is taken, choice.reason
+    if taken:
+        assert "worse than the extension only at the white references" in choice.reason
+    else:
+        assert choice.chosen == "extension"
+        assert "power-limit does not beat the extension and predicts worse beyond noise" \
+            in choice.reason
