@@ -423,7 +423,9 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     the other whites, where the cause's model predicts it from the primaries and one load
     law, and the whites weigh a third of the score; on the adaptive plan of ``bench plans``
     the extension had been kept so on three quadratic power limits and scored 0.176, 0.263
-    and 0.194 ΔE00 on hidden colours where the power limit scores 0.053, 0.063 and 0.044.
+    and 0.194 ΔE00 on hidden colours where the power limit scores 0.053, 0.063 and 0.044,
+    and on the paper plan on 13 of 16 quadratic power limits and 6 of 16 knees (0.086–0.416,
+    now 0.008–0.058).
     ``weighted-gamma`` (and ``weighted-gamma+greys`` where
     the rows hold a grey ramp), tried only where term selection kept the baseline, no drift
     was found and the sweeps are sparse, replaces it where it lowers the cross-validated
