@@ -213,3 +213,66 @@ def test_a_noisy_sweep_keeps_the_curve_monotone():
     shaped = tone_curves.along_sweep_segments(greys, sweep, noisy)
     assert np.all(np.diff(shaped.forward(np.linspace(0.0, 1.0, 2001))) >= 0)
     np.testing.assert_allclose(shaped.forward(d), d ** 2.2, rtol=1e-12)
+
+
+_GREY_LEVELS = np.array([8, 16, 24, 32, 40, 48, *range(64, 241, 16), 255]) / 255
+
+
+@pytest.mark.parametrize("edge, gamma", [(12.0, 1.2), (13.5, 1.0), (11.0, 1.3)])
+@pytest.mark.parametrize("cls", [SplineCurve, LinearCurve])
+def test_a_crushed_black_rises_from_its_edge_not_from_the_last_black_level(cls, edge, gamma):
+    """A crush drawn here as a hard threshold and a power law from it (not the generator's lifted
+    toe), read at the adaptive core's greys with Student-t noise: the level at DAC 8 reads black,
+    the grey at 16 at least :data:`CRUSH_MIN_LIGHT`, and the curve must rise from near the edge
+    (within 1.5 DAC of it; the greys are 8 apart), not from DAC 8."""
+    rng = np.random.default_rng(int(edge * 10 + gamma * 100))
+    e = edge / 255
+
+    def true(d):
+        return np.maximum(0.0, (d - e) / (1 - e)) ** gamma
+
+    output = true(_GREY_LEVELS) * (1 + 0.003 * rng.standard_t(3, _GREY_LEVELS.size))
+    points = smoothed_points(_GREY_LEVELS, output, "pchip" if cls is SplineCurve else "linear")
+    without = cls(points.drive, points.output)
+    curve = cls.fit(_GREY_LEVELS, output)
+    added = sorted(set(np.round(curve.drive_points, 9)) - set(np.round(points.drive, 9)))
+    assert len(added) == 1 and abs(added[0] * 255 - edge) < 1.5, np.array(added) * 255
+    x = np.linspace(8, 16, 33) / 255
+    error = np.abs(curve.forward(x) - true(x)).mean()
+    assert error < 0.5 * np.abs(without.forward(x) - true(x)).mean()
+
+
+@pytest.mark.parametrize("levels", [_GREY_LEVELS, np.array([16, 64, 128, 192, 255]) / 255])
+@pytest.mark.parametrize("gamma", [1.8, 2.2, 2.8])
+def test_a_power_law_without_a_crush_gets_no_edge(levels, gamma):
+    """Dark levels read less than the levels above them, but as much as the power law through
+    those levels says: no edge is added, sparse levels (4 : 1 apart) or dense."""
+    rng = np.random.default_rng(int(gamma * 10) + levels.size)
+    output = levels ** gamma * (1 + 0.003 * rng.standard_t(3, levels.size))
+    points = smoothed_points(levels, output, "pchip")
+    assert tone_curves.with_crush_edge(points.drive, points.output) == (points.drive,
+                                                                        points.output)
+    assert SplineCurve.fit(levels, output).drive_points == points.drive
+
+
+def test_a_dark_level_read_as_black_by_noise_gets_no_edge():
+    """A clean power law whose DAC 8 grey read black (noise, a clipped reading): the lit levels
+    above it rise as from DAC 0, so no edge is put between 8 and 16."""
+    output = _GREY_LEVELS ** 2.2
+    output[0] = 0.0
+    points = smoothed_points(_GREY_LEVELS, output, "pchip")
+    assert tone_curves.with_crush_edge(points.drive, points.output) == (points.drive,
+                                                                        points.output)
+
+
+
+def test_black_beside_a_dim_first_lit_level_is_not_taken_for_a_crush():
+    """A steep rise from DAC 10 puts the grey at 16 at 0.01 % of full output: a reading of zero
+    at 8 beside it is what noise does to a lit level too (the diagnosis suite's reddish black
+    beside an S-curve went 0.137 → 0.536 ΔE00 when such a zero made an edge), so none is put."""
+    e = 10 / 255
+    output = np.maximum(0.0, (_GREY_LEVELS - e) / (1 - e)) ** 2.4
+    assert output[1] < tone_curves.CRUSH_MIN_LIGHT
+    points = smoothed_points(_GREY_LEVELS, output, "pchip")
+    assert tone_curves.with_crush_edge(points.drive, points.output) == (points.drive,
+                                                                        points.output)

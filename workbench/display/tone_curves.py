@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
-from scipy.optimize import least_squares
+from scipy.optimize import brentq, least_squares
 
 from workbench.display.smoothing import whittaker_pinned
 from workbench.errors import InputError
@@ -291,7 +291,7 @@ class SplineCurve(ToneCurve):
     def fit(cls, drive, output):
         """Through the points smoothed as far as leave-one-out allows (:func:`smoothed_points`)."""
         points = smoothed_points(drive, output, "pchip")
-        return cls(points.drive, points.output)
+        return cls(*with_crush_edge(points.drive, points.output))
 
 
 @dataclass(frozen=True, eq=False)
@@ -312,9 +312,82 @@ class LinearCurve(SplineCurve):
     @classmethod
     def fit(cls, drive, output):
         points = smoothed_points(drive, output, "linear")
-        d = np.asarray(points.drive)
-        L = (np.asarray(points.output) + cls.STRICT_SLOPE * d) / (1.0 + cls.STRICT_SLOPE)
+        d, L = (np.asarray(v) for v in with_crush_edge(points.drive, points.output))
+        L = (L + cls.STRICT_SLOPE * d) / (1.0 + cls.STRICT_SLOPE)
         return cls(tuple(d), tuple(L))
+
+
+CRUSH_SHARE = 0.25
+"""A level reads black beside a crush (:func:`with_crush_edge`) where its output is at most this
+share of the power law through the next two levels, continued down to it."""
+
+
+CRUSH_MIN_LIGHT = 0.005
+"""The least output (share of full drive, above the black level) of the first lit level beside
+a level that reads black, for :func:`with_crush_edge` to take the black reading for a crush."""
+
+
+def with_crush_edge(drive, output) -> tuple[tuple, tuple]:
+    """Table points with the edge of a black crush added where the points show one.
+
+    A toe crushes the levels below an edge to black, and a table curve through a level that
+    reads black and the first lit level above it draws its rise from the black level, where
+    the light rises only from the edge: on a toe of the independent generator, read at the
+    adaptive plan's greys 8 DAC apart, hidden colours with a channel between DAC 8 and 16 were
+    0.6 ΔE00 off. Where a level ``d_k > 0`` reads at most :data:`CRUSH_SHARE` of the power law
+    through the next two levels continued down to it, the edge ``d_0`` is where the lit levels
+    above rise from (:func:`_crush_edge`); where ``d_k < d_0 < d_{k+1}`` the point
+    ``(d_0, L_k)`` is added, so the curve stays at the black level up to the edge and rises
+    from there. The highest such level is taken (one edge), and only where the first lit level
+    gives at least :data:`CRUSH_MIN_LIGHT` above the black level: beside a dimmer one a reading
+    of zero is what noise does to a lit level too (a negative reading clipped, or pooled by the
+    isotonic regression; without the floor a reddish black beside an S-curve of the diagnosis
+    suite went 0.137 → 0.536 ΔE00 on hidden colours).
+    """
+    d = np.asarray(drive, dtype=float)
+    L = np.asarray(output, dtype=float)
+    for k in range(d.size - 3, 0, -1):  # the level d_k that may read black, then two lit ones
+        (d_k, d_1, d_2), (L_k, L_1, L_2) = d[k:k + 3], L[k:k + 3]
+        if not 0.0 < L_1 < L_2 or not 0.0 < d_k:
+            continue
+        if not L_1 - L_k >= CRUSH_MIN_LIGHT:
+            break  # the first lit level is too dim for a reading of black below it to tell
+        exponent = np.log(L_2 / L_1) / np.log(d_2 / d_1)
+        if not L_k <= CRUSH_SHARE * L_1 * (d_k / d_1) ** exponent:
+            continue
+        edge = _crush_edge(d_k, d[k + 1:k + 4], L[k + 1:k + 4] - L_k)
+        if edge is not None and d_k < edge < d_1:
+            d, L = np.insert(d, k + 1, edge), np.insert(L, k + 1, L_k)
+        break
+    return tuple(float(v) for v in d), tuple(float(v) for v in L)
+
+
+def _crush_edge(black, d, L):
+    """Where the light of the lit levels ``d`` (``L`` above the black level) rises from.
+
+    The edge ``e`` of ``L = A (d − e)^γ`` through the first three levels where that rise is
+    convex (``γ ≥ 1``, a power law starting at the edge); else (a rise that is steepest at the
+    edge, as shadows lifted above a power law are, which the form reads as a late edge) the
+    chord through the first two continued down to black. None where the form puts the edge at
+    or below ``black`` (the level that reads black is then noise, not a crush).
+    """
+    if not (d.size >= 2 and 0 < L[0] < L[1]):
+        return None
+    chord = float(d[0] - L[0] * (d[1] - d[0]) / (L[1] - L[0]))
+    if d.size < 3 or not L[2] > L[1]:
+        return chord
+    r1, r2 = np.log(L[1] / L[0]), np.log(L[2] / L[1])
+
+    def mismatch(e):
+        return r1 * np.log((d[2] - e) / (d[1] - e)) - r2 * np.log((d[1] - e) / (d[0] - e))
+
+    if not mismatch(black) > 0:
+        return None  # the form through them rises from the black level or below it
+    top = d[0] * (1.0 - 1e-9)
+    if not mismatch(top) < 0:
+        return chord  # the form has no edge below the first lit level (a flat stretch above)
+    edge = float(brentq(mismatch, black, top))
+    return edge if r1 / np.log((d[1] - edge) / (d[0] - edge)) >= 1.0 else chord
 
 
 POWER_SEGMENT_GRID = 300
