@@ -256,14 +256,15 @@ def test_a_power_law_without_a_crush_gets_no_edge(levels, gamma):
 
 
 def test_a_dark_level_read_as_black_by_noise_gets_no_edge():
-    """A clean power law whose DAC 8 grey read black (noise, a clipped reading): the lit levels
-    above it rise as from DAC 0, so no edge is put between 8 and 16."""
-    output = _GREY_LEVELS ** 2.2
+    """A clean power law whose DAC 8 grey read black (noise, a clipped reading), the grey at 16
+    above the light floor: the lit levels above it rise as from DAC 0, so no edge is put between
+    8 and 16."""
+    output = _GREY_LEVELS ** 1.8
     output[0] = 0.0
+    assert output[1] >= tone_curves.CRUSH_MIN_LIGHT
     points = smoothed_points(_GREY_LEVELS, output, "pchip")
     assert tone_curves.with_crush_edge(points.drive, points.output) == (points.drive,
                                                                         points.output)
-
 
 
 def test_black_beside_a_dim_first_lit_level_is_not_taken_for_a_crush():
