@@ -31,7 +31,7 @@ extension can use the load gain as its interaction term
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -78,6 +78,7 @@ class PowerLimitFit:
     dof: int
     chi2_power: float
     dof_power: int
+    full_XYZ: tuple | None = None  # undimmed primaries' XYZ (rows: channels), where fitted in XYZ
 
     @property
     def weights(self) -> np.ndarray:
@@ -111,14 +112,41 @@ def _rows(context: DiagnosisContext):
             np.concatenate(sd), white, white_sd)
 
 
-def fit_power_limit(context: DiagnosisContext, min_levels: int = MIN_SWEEP_LEVELS) -> PowerLimitFit | None:
+def _mixtures(context: DiagnosisContext) -> np.ndarray:
+    """The fit rows that light two channels or more, white excepted: greys and partial-drive
+    mixtures, full field, one row per distinct reading (a mask)."""
+    rgb = context.fit.rgb
+    return (((rgb > 0).sum(axis=1) >= 2) & ~np.all(rgb >= 255, axis=1) & ~context.copies
+            & (context.fit.window_or_full >= 1.0))
+
+
+def _mixture_rows(context: DiagnosisContext):
+    """(drives (M, 3), Y black-subtracted, sd) of :func:`_mixtures`."""
+    keep = _mixtures(context)
+    Y = context.fit.XYZ[keep, 1]
+    return (np.clip(context.fit.rgb[keep] / 255.0, 0, 1), Y - context.black[1],
+            context.noise.sd_Y(Y))
+
+
+def fit_power_limit(context: DiagnosisContext, min_levels: int = MIN_SWEEP_LEVELS,
+                    mixtures: bool = False) -> PowerLimitFit | None:
     """The joint power-law + load-gain fit (module doc), or None without the rows it needs
-    (a white, and ``min_levels`` sweep levels below full drive of every channel)."""
+    (a white, and ``min_levels`` sweep levels below full drive of every channel).
+
+    ``mixtures`` True: the greys and partial-drive mixtures among the fit rows join the fit (their
+    load is ``Σ_c w_c A_c d_c^γ_c / Σ A``), and ``chi2``/``chi2_power`` include them. The test
+    that identifies a power limit (:func:`tone_bend_explained`) reads the sweeps and the white
+    alone, which every plan has; the model that is exported and cross-validated
+    (:func:`power_limit_model`) uses the mixtures too, and X, Y and Z (:func:`refine_in_XYZ`)."""
     if context.white_count == 0 or len(context.sweeps) != 3:
         return None
     if any((s.drive < 1).sum() < min_levels for s in context.sweeps):
         return None
     channel, drive, Y, sd, white, white_sd = _rows(context)
+    if mixtures:
+        mix_drive, mix_Y, mix_sd = _mixture_rows(context)
+    else:
+        mix_drive, mix_Y, mix_sd = np.zeros((0, 3)), np.zeros(0), np.zeros(0)
     full = np.array([s.full_XYZ[1] for s in context.sweeps])
     if np.any(full <= 0) or white <= 0:
         return None
@@ -131,11 +159,15 @@ def fit_power_limit(context: DiagnosisContext, min_levels: int = MIN_SWEEP_LEVEL
         load = weights[channel] * L
         x = np.clip((load - k) / (1 - k), 0, 1)
         sweep = A[channel] * L * (1 - a * x ** q) + offset
-        return sweep, A.sum() * (1 - a) + offset
+        outputs = A * mix_drive ** gamma  # (M, 3) undimmed
+        x_mix = np.clip((outputs.sum(axis=1) / A.sum() - k) / (1 - k), 0, 1)
+        mixed = outputs.sum(axis=1) * (1 - a * x_mix ** q) + offset
+        return sweep, A.sum() * (1 - a) + offset, mixed
 
     def residual(theta, weights=sd):
-        sweep, white_pred = predict(theta)
-        return np.concatenate([(sweep - Y) / weights, [(white_pred - white) / white_sd]])
+        sweep, white_pred, mixed = predict(theta)
+        return np.concatenate([(sweep - Y) / weights, [(white_pred - white) / white_sd],
+                               (mixed - mix_Y) / mix_sd])
 
     best = None
     for knee in (0.0, 0.2, 0.4, 0.55, 0.7):
@@ -152,12 +184,16 @@ def fit_power_limit(context: DiagnosisContext, min_levels: int = MIN_SWEEP_LEVEL
     if best is None:
         return None
     chi2 = float(2 * best.cost)
-    dof = int(Y.size + 1 - best.x.size)
+    dof = int(Y.size + 1 + mix_Y.size - best.x.size)
 
-    # plain power laws: each sweep normalized by its own full point, the white fitted freely
+    # plain power laws: each sweep normalized by its own full point, the white fitted freely,
+    # the mixtures additive
     def residual_power(theta, weights=sd):
         gamma, A, offset = theta[:3], theta[3:6], theta[6]
-        return (A[channel] * np.clip(drive, 0, 1) ** gamma[channel] + offset - Y) / weights
+        mixed = (A * mix_drive ** gamma).sum(axis=1) + offset
+        return np.concatenate([
+            (A[channel] * np.clip(drive, 0, 1) ** gamma[channel] + offset - Y) / weights,
+            (mixed - mix_Y) / mix_sd])
 
     power = least_squares(residual_power, [2.2, 2.2, 2.2, *full, 0.0],
                           bounds=([0.3] * 3 + [0.0] * 3 + [-np.inf],
@@ -168,7 +204,69 @@ def fit_power_limit(context: DiagnosisContext, min_levels: int = MIN_SWEEP_LEVEL
                          loss=float(best.x[6]), knee=float(best.x[7]), shape=float(best.x[8]),
                          black_offset_Y=float(best.x[9]),
                          chi2=chi2, dof=dof, chi2_power=chi2_power,
-                         dof_power=int(Y.size - power.x.size))
+                         dof_power=int(Y.size + mix_Y.size - power.x.size))
+
+
+def _whitened(noise, XYZ_abs, counts):
+    """Matrices that whiten each row's XYZ residual: inverse Cholesky factors of its covariance."""
+    covariance = noise.covariance(XYZ_abs) / np.asarray(counts, dtype=float)[:, None, None]
+    return np.linalg.inv(np.linalg.cholesky(covariance))
+
+
+def refine_in_XYZ(context: DiagnosisContext, fit: PowerLimitFit, mixtures: bool = True
+                  ) -> PowerLimitFit:
+    """``fit`` refitted on X, Y and Z of every row it read (sweeps, white, and the greys and
+    mixtures where ``mixtures``), each row weighted by its full noise covariance, the undimmed
+    primaries' XYZ free: ``XYZ = K + δ·w + g(load) Σ_c P_c d_c^γ_c``."""
+    black = context.black
+    rows_d, rows_XYZ, rows_n = [], [], []
+    for sweep in context.sweeps:
+        d = np.zeros((sweep.drive.size, 3))
+        d[:, sweep.channel] = np.clip(sweep.drive, 0, 1)
+        rows_d.append(d)
+        rows_XYZ.append(sweep.XYZ)
+        rows_n.append(np.ones(sweep.drive.size) if sweep.counts is None else sweep.counts)
+    rows_d.append(np.ones((1, 3)))
+    rows_XYZ.append((context.white - black)[None])
+    rows_n.append(np.array([max(context.white_count, 1)]))
+    if mixtures:
+        keep = _mixtures(context)
+        rows_d.append(np.clip(context.fit.rgb[keep] / 255.0, 0, 1))
+        rows_XYZ.append(context.fit.XYZ[keep] - black)
+        rows_n.append(np.ones(keep.sum()))
+    drive = np.concatenate(rows_d)
+    XYZ = np.concatenate(rows_XYZ)
+    whiten = _whitened(context.noise, XYZ + black, np.concatenate(rows_n))
+    direction = context.white / context.white[1]
+    full = np.array([s.full_XYZ for s in context.sweeps])
+    undimmed = full / fit.gain(fit.weights * 1.0)[:, None]
+    start = np.concatenate([fit.gamma, undimmed.reshape(-1),
+                            [fit.loss, fit.knee, fit.shape, fit.black_offset_Y]])
+
+    def predict(theta):
+        gamma, P = theta[:3], theta[3:12].reshape(3, 3)
+        a, k, q, offset = theta[12:]
+        outputs = P[:, 1] * drive ** gamma  # (N, 3) undimmed luminances
+        x = np.clip((outputs.sum(axis=1) / P[:, 1].sum() - k) / (1 - k), 0, 1)
+        return (drive ** gamma) @ P * (1 - a * x ** q)[:, None] + offset * direction
+
+    def residual(theta):
+        return np.einsum("nij,nj->ni", whiten, predict(theta) - XYZ).reshape(-1)
+
+    lower = [0.3] * 3 + [-np.inf] * 9 + [-0.5, 0.0, 0.5, -np.inf]
+    upper = [8.0] * 3 + [np.inf] * 9 + [0.95, 0.9, 4.0, np.inf]
+    start = np.clip(start, np.array(lower) + 1e-9, np.array(upper) - 1e-9)
+    try:
+        best = least_squares(residual, start, bounds=(lower, upper))
+    except ValueError:
+        return fit
+    P = best.x[3:12].reshape(3, 3)
+    if np.any(P[:, 1] <= 0):
+        return fit
+    return replace(fit, gamma=tuple(float(v) for v in best.x[:3]),
+                   full_Y=tuple(float(v) for v in P[:, 1]), loss=float(best.x[12]),
+                   knee=float(best.x[13]), shape=float(best.x[14]),
+                   black_offset_Y=float(best.x[15]), full_XYZ=tuple(map(tuple, P.tolist())))
 
 
 def undimmed_sweeps_tone_test(context: DiagnosisContext, fit: PowerLimitFit,
@@ -268,11 +366,14 @@ def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = Non
     from workbench.display.tone_curves import PowerCurve
     from workbench.errors import InputError
 
-    fit = fit_power_limit(context, min_levels) if fit is None else fit
     if fit is None:
-        raise InputError(f"a power limit needs every channel swept at {min_levels} levels or more "
-                         "below full drive, and a white")
-    full = np.array([s.full_XYZ for s in context.sweeps])
+        fit = fit_power_limit(context, min_levels, mixtures=True)
+        if fit is None:
+            raise InputError(f"a power limit needs every channel swept at {min_levels} levels or "
+                             "more below full drive, and a white")
+        fit = refine_in_XYZ(context, fit)
+    full = (np.array(fit.full_XYZ) if fit.full_XYZ is not None
+            else np.array([s.full_XYZ for s in context.sweeps]))
     black = (np.maximum(context.black + fit.black_offset_Y * context.white / context.white[1], 0)
              if with_black else np.zeros(3))
     return ExtendedDisplay(

@@ -1,0 +1,92 @@
+"""The exported power-limit model is fitted on every row that carries the load law, in X, Y and Z.
+
+A power limit is *identified* on the sweeps and the white alone (every plan has them), but the
+model exported and cross-validated (:func:`~workbench.diagnostics.power_limit.power_limit_model`)
+also reads the greys and partial-drive mixtures, whose loads reach the white's, and the X and Z
+of every row: the undimmed primaries' chromaticities are then averaged over every bright reading
+rather than taken from one reading at full drive. On the adaptive plan's core (ten levels per
+channel and a grey ramp) a luminance fit of the sweeps and the white traded the load law's knee
+against its shape and misplaced the green primary's undimmed output by half a per cent.
+
+The display here is written for this test, unlike the independent generator's and unlike the
+model's own form: the load gain is ``exp(−c · load^1.6)`` (no knee, no clipped power), the
+instrument's luminance noise is Student-t and its chromaticity noise is drawn in x and y.
+"""
+
+import numpy as np
+import pytest
+
+from workbench.colorimetry import delta_E2000
+from workbench.diagnostics.detectors import build_context
+from workbench.diagnostics.power_limit import fit_power_limit, power_limit_model, tone_bend_explained
+from workbench.session import Session
+
+LEVELS = (32, 64, 96, 128, 160, 192, 208, 224, 236, 246)  # the adaptive core's sweep levels
+GREYS = (16, 32, 48) + tuple(range(64, 241, 16))
+PRIMARIES_xyY = np.array([[0.655, 0.335, 0.245], [0.300, 0.610, 0.685], [0.150, 0.055, 0.070]])
+
+
+class _SaturatingLimit:
+    """Power-law channels dimmed together by ``exp(−c · load^1.6)``; load 1 at white."""
+
+    def __init__(self, seed):
+        rng = np.random.default_rng(seed)
+        self.gamma = rng.uniform(1.9, 2.5, 3)
+        xyY = PRIMARIES_xyY.copy()
+        xyY[:, :2] += rng.uniform(-0.01, 0.01, (3, 2))
+        x, y, Y = xyY.T
+        self.P = 100 * np.column_stack([x * Y / y, Y, (1 - x - y) * Y / y])  # undimmed XYZ
+        self.c = rng.uniform(0.06, 0.14)
+
+    def XYZ(self, rgb):
+        L = np.clip(np.asarray(rgb, dtype=float) / 255.0, 0, 1) ** self.gamma
+        load = L @ self.P[:, 1] / self.P[:, 1].sum()
+        return (L @ self.P) * np.exp(-self.c * load ** 1.6)[:, None] + np.array([0.02, 0.02, 0.03])
+
+
+def _measured(display, rgb, rng):
+    XYZ = display.XYZ(rgb)
+    gain = 1 + 0.0015 * rng.standard_t(4, len(rgb))
+    S = XYZ.sum(axis=1)
+    x = XYZ[:, 0] / S + 2e-4 * rng.standard_normal(len(rgb))
+    y = XYZ[:, 1] / S + 2e-4 * rng.standard_normal(len(rgb))
+    Y = XYZ[:, 1] * gain
+    return np.column_stack([x * Y / y, Y, (1 - x - y) * Y / y]) + 0.002 * rng.standard_normal((len(rgb), 3))
+
+
+def _session(display, seed):
+    rows = [("black", (0, 0, 0)), ("white", (255, 255, 255))]
+    for c, kind in enumerate(("ramp-r", "ramp-g", "ramp-b")):
+        for level in (255, *LEVELS):
+            rgb = [0, 0, 0]
+            rgb[c] = level
+            rows.append((kind, tuple(rgb)))
+        rows.append(("white", (255, 255, 255)))
+    rows += [("grey", (v, v, v)) for v in GREYS] + [("white", (255, 255, 255))]
+    rgb = np.array([r for _, r in rows], dtype=float)
+    return Session(kind=np.array([k for k, _ in rows], dtype=object), rgb=rgb,
+                   XYZ=_measured(display, rgb, np.random.default_rng(seed + 100)),
+                   t_s=np.arange(len(rows), dtype=float) * 5.0, source=f"saturating limit {seed}",
+                   metadata={})
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_exported_power_limit_reads_the_greys_and_the_chromaticities(seed):
+    display = _SaturatingLimit(seed)
+    context = build_context(_session(display, seed), drift_found=False)
+    explained, why, sweeps_fit = tone_bend_explained(context)
+    assert explained, why  # identified on the sweeps and the white, as before
+    hidden = np.random.default_rng(seed + 200).uniform(0, 255, (300, 3))
+    truth = display.XYZ(hidden)
+    white = display.XYZ(np.full((1, 3), 255.0))[0]
+
+    def error(model):
+        return float(np.mean(delta_E2000(model.forward(hidden), truth, white)))
+
+    exported = error(power_limit_model(context))
+    from_sweeps = error(power_limit_model(context, fit=sweeps_fit))  # the sweeps' and white's Y
+    assert exported < 0.6 * from_sweeps, (exported, from_sweeps)
+    assert exported < 0.06, exported
+    # the greys in the luminance fit without X and Z: the chromaticities still matter
+    greys_in_Y = error(power_limit_model(context, fit=fit_power_limit(context, mixtures=True)))
+    assert exported < greys_in_Y, (exported, greys_in_Y)
