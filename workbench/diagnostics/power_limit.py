@@ -40,6 +40,7 @@ from workbench.diagnostics.detectors import DiagnosisContext, family_size
 from workbench.diagnostics.significance import critical_p, f_sf
 
 __all__ = ["PowerLimitFit", "fit_power_limit", "tone_bend_explained", "undimmed_sweeps_tone_test",
+           "mixtures_show_load_gain", "refine_in_XYZ", "MIN_LOADED_MIXTURES",
            "power_limit_model",
            "MIN_SWEEP_LEVELS", "MIN_REFIT_SWEEP_LEVELS"]
 
@@ -340,6 +341,41 @@ def tone_bend_explained(context: DiagnosisContext, fit: PowerLimitFit | None = N
            f"measured; the gain lowers the sweeps' χ² from {fit.chi2_power:.0f} to "
            f"{fit.chi2:.0f}, p {p_gain:.2g})")
     return explained, why, fit
+
+
+MIN_LOADED_MIXTURES = 3
+"""Greys or mixtures loading the panel beyond its brightest channel alone that
+:func:`mixtures_show_load_gain` needs."""
+
+
+def mixtures_show_load_gain(context: DiagnosisContext) -> tuple[bool, str, PowerLimitFit | None]:
+    """Whether one load gain, fitted with the greys and mixtures, explains their shortfall.
+
+    A power limit whose knee lies above every channel's own share of the white's luminance
+    leaves the sweeps untouched (:func:`tone_bend_explained` finds no bend to explain); the
+    greys and mixtures that load the panel beyond it carry it. Shown: at least
+    :data:`MIN_LOADED_MIXTURES` of them load the panel beyond the brightest channel's share,
+    the load gain fitted on them, the sweeps and the white (:func:`fit_power_limit` with
+    ``mixtures``) lowers χ² against additive power laws beyond chance (F-test of its three
+    parameters at the family-wise level), and it is a loss. The model choice is then offered the
+    power-limit model, which must lower the cross-validated error to be taken.
+    """
+    fit = fit_power_limit(context, mixtures=True)
+    if fit is None:
+        return False, "too few sweep levels or no white to fit a power limit on", None
+    drive, _, _ = _mixture_rows(context)
+    load = (np.asarray(fit.full_Y) * drive ** np.asarray(fit.gamma)).sum(axis=1) / sum(fit.full_Y)
+    loaded = int(np.sum(load > fit.weights.max()))
+    if loaded < MIN_LOADED_MIXTURES:
+        return False, f"{loaded} greys or mixtures load the panel beyond one channel", fit
+    level = critical_p(family_size(context.apl_testable))
+    extra = max(fit.dof_power + 1 - fit.dof, 1)
+    f_gain = ((fit.chi2_power - fit.chi2) / extra) / max(fit.chi2 / max(fit.dof, 1), 1.0)
+    p_gain = f_sf(max(f_gain, 0.0), extra, max(fit.dof, 1))
+    shown = bool(p_gain <= level and fit.loss > 0)
+    return shown, (f"{fit.describe()}: with the {loaded} greys and mixtures that load the panel "
+                   f"beyond one channel, the load gain lowers χ² from {fit.chi2_power:.0f} to "
+                   f"{fit.chi2:.0f}, p {p_gain:.2g}"), fit
 
 
 def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = None,

@@ -53,7 +53,7 @@ from workbench.diagnostics.detectors import (
 )
 from workbench.diagnostics.cross_validation import cross_validated_errors, select_terms
 from workbench.diagnostics.evidence import partial_greys
-from workbench.diagnostics.power_limit import tone_bend_explained
+from workbench.diagnostics.power_limit import mixtures_show_load_gain, tone_bend_explained
 from workbench.diagnostics.model_choice import (
     ALTERNATIVE_CANDIDATES,
     WEIGHTED_CANDIDATES,
@@ -494,8 +494,8 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, str
     if interaction.details.get("channel_specific"):  # the detector's common-gain test
         return results, None
     explained, why, _ = tone_bend_explained(context)
-    if not explained:
-        return results, None
+    if not explained:  # a knee above every channel's own load: only mixtures reach it
+        return results, ("offered" if mixtures_show_load_gain(context)[0] else None)
     if "tone-curve-shape" not in found:
         # the bend is there but below the tone test's threshold (a plan with few sweep
         # levels): the power limit is offered to the model choice, not identified
