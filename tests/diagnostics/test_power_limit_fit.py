@@ -8,6 +8,11 @@ rather than taken from one reading at full drive. On the adaptive plan's core (t
 channel and a grey ramp) a luminance fit of the sweeps and the white traded the load law's knee
 against its shape and misplaced the green primary's undimmed output by half a per cent.
 
+A power limit whose knee lies above every channel's own share of the white leaves the sweeps
+untouched: no bend to explain, so the greys and mixtures that load the panel beyond the knee
+must show it (:func:`~workbench.diagnostics.power_limit.mixtures_show_load_gain`), and the
+model choice is then offered the power-limit model.
+
 The display here is written for this test, unlike the independent generator's and unlike the
 model's own form: the load gain is ``exp(−c · load^1.6)`` (no knee, no clipped power), the
 instrument's luminance noise is Student-t and its chromaticity noise is drawn in x and y.
@@ -18,7 +23,13 @@ import pytest
 
 from workbench.colorimetry import delta_E2000
 from workbench.diagnostics.detectors import build_context
-from workbench.diagnostics.power_limit import fit_power_limit, power_limit_model, tone_bend_explained
+from workbench.diagnostics import diagnose
+from workbench.diagnostics.power_limit import (
+    fit_power_limit,
+    mixtures_show_load_gain,
+    power_limit_model,
+    tone_bend_explained,
+)
 from workbench.session import Session
 
 LEVELS = (32, 64, 96, 128, 160, 192, 208, 224, 236, 246)  # the adaptive core's sweep levels
@@ -29,7 +40,7 @@ PRIMARIES_xyY = np.array([[0.655, 0.335, 0.245], [0.300, 0.610, 0.685], [0.150, 
 class _SaturatingLimit:
     """Power-law channels dimmed together by ``exp(−c · load^1.6)``; load 1 at white."""
 
-    def __init__(self, seed):
+    def __init__(self, seed, knee=None):
         rng = np.random.default_rng(seed)
         self.gamma = rng.uniform(1.9, 2.5, 3)
         xyY = PRIMARIES_xyY.copy()
@@ -37,11 +48,16 @@ class _SaturatingLimit:
         x, y, Y = xyY.T
         self.P = 100 * np.column_stack([x * Y / y, Y, (1 - x - y) * Y / y])  # undimmed XYZ
         self.c = rng.uniform(0.06, 0.14)
+        self.knee = knee  # a high knee: the loss grows as (load − knee)^1.5 past it
 
     def XYZ(self, rgb):
         L = np.clip(np.asarray(rgb, dtype=float) / 255.0, 0, 1) ** self.gamma
         load = L @ self.P[:, 1] / self.P[:, 1].sum()
-        return (L @ self.P) * np.exp(-self.c * load ** 1.6)[:, None] + np.array([0.02, 0.02, 0.03])
+        if self.knee is None:
+            gain = np.exp(-self.c * load ** 1.6)
+        else:
+            gain = 1 - self.c * (np.clip(load - self.knee, 0, None) / (1 - self.knee)) ** 1.5
+        return (L @ self.P) * gain[:, None] + np.array([0.02, 0.02, 0.03])
 
 
 def _measured(display, rgb, rng):
@@ -54,7 +70,7 @@ def _measured(display, rgb, rng):
     return np.column_stack([x * Y / y, Y, (1 - x - y) * Y / y]) + 0.002 * rng.standard_normal((len(rgb), 3))
 
 
-def _session(display, seed):
+def _session(display, seed, mixtures=()):
     rows = [("black", (0, 0, 0)), ("white", (255, 255, 255))]
     for c, kind in enumerate(("ramp-r", "ramp-g", "ramp-b")):
         for level in (255, *LEVELS):
@@ -63,6 +79,7 @@ def _session(display, seed):
             rows.append((kind, tuple(rgb)))
         rows.append(("white", (255, 255, 255)))
     rows += [("grey", (v, v, v)) for v in GREYS] + [("white", (255, 255, 255))]
+    rows += [("mixture", rgb) for rgb in mixtures]
     rgb = np.array([r for _, r in rows], dtype=float)
     return Session(kind=np.array([k for k, _ in rows], dtype=object), rgb=rgb,
                    XYZ=_measured(display, rgb, np.random.default_rng(seed + 100)),
@@ -90,3 +107,35 @@ def test_the_exported_power_limit_reads_the_greys_and_the_chromaticities(seed):
     # the greys in the luminance fit without X and Z: the chromaticities still matter
     greys_in_Y = error(power_limit_model(context, fit=fit_power_limit(context, mixtures=True)))
     assert exported < greys_in_Y, (exported, greys_in_Y)
+
+
+MIXTURES = [(r, g, b) for r in (128, 255) for g in (160, 224, 255) for b in (128, 255)
+            if (r, g, b) != (255, 255, 255)]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_knee_above_every_channel_is_offered_from_the_greys(seed):
+    """A knee at 82 % load: no sweep reaches it, the greys and bright mixtures do."""
+    display = _SaturatingLimit(seed, knee=0.82)
+    session = _session(display, seed, MIXTURES)
+    context = build_context(session, drift_found=False)
+    assert not tone_bend_explained(context)[0]  # the sweeps carry no bend
+    shown, why, _ = mixtures_show_load_gain(context)
+    assert shown, why
+    diagnosis = diagnose(session)
+    assert diagnosis.model_choice.chosen == "power-limit", diagnosis.model_choice.reason
+    hidden = np.random.default_rng(seed + 300).uniform(0, 255, (300, 3))
+    truth = display.XYZ(hidden)
+    white = display.XYZ(np.full((1, 3), 255.0))[0]
+    exported = float(np.mean(delta_E2000(diagnosis.extended.forward(hidden), truth, white)))
+    baseline = float(np.mean(delta_E2000(diagnosis.baseline.forward(hidden), truth, white)))
+    assert exported < 0.05 and exported < 0.5 * baseline, (exported, baseline)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_additive_greys_show_no_load_gain(seed):
+    display = _SaturatingLimit(seed)
+    display.c = 0.0
+    context = build_context(_session(display, seed, MIXTURES), drift_found=False)
+    shown, why, _ = mixtures_show_load_gain(context)
+    assert not shown, why
