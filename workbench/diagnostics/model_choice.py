@@ -416,7 +416,8 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         drive) fits the greys as well, and the mixtures off the grey axis are then the
         candidate's to lose (four headset sessions of ``bench plans`` lowered the error within
         noise, 0.058 ± 0.054, and scored 0.140–0.172 ΔE00 on hidden colours where the
-        extension scores 0.094–0.118).
+        extension scores 0.094–0.118). Taken, it is not held against the flexible candidates
+        tried after it as the model of an identified cause is: they meet it as any other.
     current_errors_apart : callable or None
         ``current``'s per-row cross-validated errors with the greys in two folds of their
         own (:func:`~workbench.diagnostics.cross_validation.fold_of_rows`), computed only

@@ -94,6 +94,7 @@ class PowerLimitFit:
     chi2_power: float
     dof_power: int
     full_XYZ: tuple | None = None  # undimmed primaries' XYZ (rows: channels), where fitted in XYZ
+    black_offset_XYZ: tuple | None = None  # the black as the rows see it less the black rows', in XYZ
 
     @property
     def weights(self) -> np.ndarray:
@@ -232,7 +233,11 @@ def refine_in_XYZ(context: DiagnosisContext, fit: PowerLimitFit, mixtures: bool 
                   ) -> PowerLimitFit:
     """``fit`` refitted on X, Y and Z of every row it read (sweeps, white, and the greys and
     mixtures where ``mixtures``), each row weighted by its full noise covariance, the undimmed
-    primaries' XYZ free: ``XYZ = K + δ·w + g(load) Σ_c P_c d_c^γ_c``."""
+    primaries' XYZ free: ``XYZ = K + δ + g(load) Σ_c P_c d_c^γ_c``. ``δ``, the black as the
+    rows see it less the measured black, is free in X, Y and Z: the black rows' noise is
+    subtracted from every row, and a dark sweep point's chromaticity carries it (with ``δ``
+    along the white's chromaticity only, the primaries' chromaticities absorbed the rest: on a
+    knee of the peer bench, 0.0006 off in x where one reading at full drive is 0.0002 off)."""
     black = context.black
     rows_d, rows_XYZ, rows_n = [], [], []
     for sweep in context.sweeps:
@@ -252,24 +257,23 @@ def refine_in_XYZ(context: DiagnosisContext, fit: PowerLimitFit, mixtures: bool 
     drive = np.concatenate(rows_d)
     XYZ = np.concatenate(rows_XYZ)
     whiten = _whitened(context.noise, XYZ + black, np.concatenate(rows_n))
-    direction = context.white / context.white[1]
     full = np.array([s.full_XYZ for s in context.sweeps])
     undimmed = full / fit.gain(fit.weights * 1.0)[:, None]
-    start = np.concatenate([fit.gamma, undimmed.reshape(-1),
-                            [fit.loss, fit.knee, fit.shape, fit.black_offset_Y]])
+    start = np.concatenate([fit.gamma, undimmed.reshape(-1), [fit.loss, fit.knee, fit.shape],
+                            fit.black_offset_Y * context.white / context.white[1]])
 
     def predict(theta):
         gamma, P = theta[:3], theta[3:12].reshape(3, 3)
-        a, k, q, offset = theta[12:]
+        a, k, q = theta[12:15]
         outputs = P[:, 1] * drive ** gamma  # (N, 3) undimmed luminances
         x = np.clip((outputs.sum(axis=1) / P[:, 1].sum() - k) / (1 - k), 0, 1)
-        return (drive ** gamma) @ P * (1 - a * x ** q)[:, None] + offset * direction
+        return (drive ** gamma) @ P * (1 - a * x ** q)[:, None] + theta[15:18]
 
     def residual(theta):
         return np.einsum("nij,nj->ni", whiten, predict(theta) - XYZ).reshape(-1)
 
-    lower = [0.3] * 3 + [-np.inf] * 9 + [-0.5, 0.0, 0.5, -np.inf]
-    upper = [8.0] * 3 + [np.inf] * 9 + [0.95, 0.9, 4.0, np.inf]
+    lower = [0.3] * 3 + [-np.inf] * 9 + [-0.5, 0.0, 0.5] + [-np.inf] * 3
+    upper = [8.0] * 3 + [np.inf] * 9 + [0.95, 0.9, 4.0] + [np.inf] * 3
     start = np.clip(start, np.array(lower) + 1e-9, np.array(upper) - 1e-9)
     try:
         best = least_squares(residual, start, bounds=(lower, upper))
@@ -281,7 +285,8 @@ def refine_in_XYZ(context: DiagnosisContext, fit: PowerLimitFit, mixtures: bool 
     return replace(fit, gamma=tuple(float(v) for v in best.x[:3]),
                    full_Y=tuple(float(v) for v in P[:, 1]), loss=float(best.x[12]),
                    knee=float(best.x[13]), shape=float(best.x[14]),
-                   black_offset_Y=float(best.x[15]), full_XYZ=tuple(map(tuple, P.tolist())))
+                   black_offset_Y=float(best.x[16]), full_XYZ=tuple(map(tuple, P.tolist())),
+                   black_offset_XYZ=tuple(float(v) for v in best.x[15:18]))
 
 
 def undimmed_sweeps_tone_test(context: DiagnosisContext, fit: PowerLimitFit,
@@ -427,8 +432,9 @@ def power_limit_model(context: DiagnosisContext, fit: PowerLimitFit | None = Non
         fit = refine_in_XYZ(context, fit)
     full = (np.array(fit.full_XYZ) if fit.full_XYZ is not None
             else np.array([s.full_XYZ for s in context.sweeps]))
-    black = (np.maximum(context.black + fit.black_offset_Y * context.white / context.white[1], 0)
-             if with_black else np.zeros(3))
+    offset = (np.asarray(fit.black_offset_XYZ) if fit.black_offset_XYZ is not None
+              else fit.black_offset_Y * context.white / context.white[1])
+    black = np.maximum(context.black + offset, 0) if with_black else np.zeros(3)
     return ExtendedDisplay(
         black=black, white=context.white, primaries_xy=xy_of(full),
         primaries_Y=np.asarray(fit.full_Y), tone=tuple(PowerCurve(g) for g in fit.gamma),
