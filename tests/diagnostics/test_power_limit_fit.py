@@ -148,3 +148,32 @@ def test_additive_greys_show_no_load_gain(seed):
     context = build_context(_session(display, seed, MIXTURES), drift_found=False)
     shown, why, _ = mixtures_show_load_gain(context)
     assert not shown, why
+
+
+def test_the_black_rows_noise_does_not_tint_the_primaries():
+    """Every row is black-subtracted with the black rows' reading, whose floor noise differs in
+    X, Y and Z; dense sweeps' dark points carry it in their chromaticity. The fit frees the
+    black offset in all three, so the primaries' chromaticities come from the bright rows."""
+    display = _SaturatingLimit(4)
+    rows = [("black", (0, 0, 0)), ("white", (255, 255, 255))]
+    for c, kind in enumerate(("ramp-r", "ramp-g", "ramp-b")):
+        for level in range(5, 256, 5):
+            rgb = [0, 0, 0]
+            rgb[c] = level
+            rows.append((kind, tuple(rgb)))
+        rows.append(("white", (255, 255, 255)))
+    rows += [("grey", (v, v, v)) for v in range(16, 241, 16)] + [("white", (255, 255, 255))]
+    rgb = np.array([r for _, r in rows], dtype=float)
+    rng = np.random.default_rng(7)
+    XYZ = _measured(display, rgb, rng)
+    XYZ[0] = display.XYZ(rgb[:1])[0] + np.array([0.012, -0.012, -0.011])  # the black, read off
+    session = Session(kind=np.array([k for k, _ in rows], dtype=object), rgb=rgb, XYZ=XYZ,
+                      t_s=np.arange(len(rows), dtype=float) * 5.0, source="dense sweeps",
+                      metadata={})
+    context = build_context(session, drift_found=False)
+    model = power_limit_model(context)
+    true_xy = display.P[:, :2] / display.P.sum(axis=1, keepdims=True)
+    fitted = np.array([model.forward(np.diag([255.0] * 3)[c][None])[0] - model.forward(
+        np.zeros((1, 3)))[0] for c in range(3)])
+    fitted_xy = fitted[:, :2] / fitted.sum(axis=1, keepdims=True)
+    assert np.max(np.abs(fitted_xy - true_xy)) < 4e-4, fitted_xy - true_xy
