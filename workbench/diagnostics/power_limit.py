@@ -33,7 +33,8 @@ has, but the model exported and cross-validated (:func:`power_limit_model`)
 is fitted on every row that carries the load law: the greys and partial-drive
 mixtures too, whose loads reach the white's where a sweep's stop at its
 channel's share, and in X, Y and Z, each row weighted by its full noise
-covariance, the undimmed primaries' XYZ free (:func:`refine_in_XYZ`). Fitted in
+covariance, the undimmed primaries' XYZ and the black offset free
+(:func:`refine_in_XYZ`). Fitted in
 luminance on the sweeps and the white alone, the adaptive core's ten levels a
 channel traded the knee against the shape, and one reading of each primary at
 full drive fixed its chromaticity: on the plans bench's quadratic power limits
