@@ -322,6 +322,14 @@ def undimmed_sweeps_tone_test(context: DiagnosisContext, fit: PowerLimitFit,
     return min(1.0, len(p_values) * min(p_values)), float(max(gaps))
 
 
+def _gain_p(fit: PowerLimitFit) -> float:
+    """p of the F-test of the load gain's parameters: ``chi2`` against ``chi2_power`` (the
+    residual variance never taken below the noise model's, 1 per degree of freedom)."""
+    extra = max(fit.dof_power + 1 - fit.dof, 1)
+    f_gain = ((fit.chi2_power - fit.chi2) / extra) / max(fit.chi2 / max(fit.dof, 1), 1.0)
+    return float(f_sf(max(f_gain, 0.0), extra, max(fit.dof, 1)))
+
+
 BEND_LEFT_SHARE = 0.25
 """With the load gain divided out, a sweep's largest departure from a power law must fall to
 this share of what it was (and below :data:`BEND_LEFT_FLOOR`) where the tone test still finds
@@ -348,9 +356,7 @@ def tone_bend_explained(context: DiagnosisContext, fit: PowerLimitFit | None = N
     if fit is None:
         return False, "too few sweep levels or no white to fit a power limit on", None
     level = critical_p(family_size(context.apl_testable))
-    extra = max(fit.dof_power + 1 - fit.dof, 1)
-    f_gain = ((fit.chi2_power - fit.chi2) / extra) / max(fit.chi2 / max(fit.dof, 1), 1.0)
-    p_gain = f_sf(max(f_gain, 0.0), extra, max(fit.dof, 1))
+    p_gain = _gain_p(fit)
     p_left, gap_left = undimmed_sweeps_tone_test(context, fit)
     _, gap_measured = undimmed_sweeps_tone_test(context, fit, divide=False)
     flat = gap_left <= min(BEND_LEFT_SHARE * gap_measured, BEND_LEFT_FLOOR)
@@ -388,11 +394,8 @@ def mixtures_show_load_gain(context: DiagnosisContext) -> tuple[bool, str, Power
     loaded = int(np.sum(load > fit.weights.max()))
     if loaded < MIN_LOADED_MIXTURES:
         return False, f"{loaded} greys or mixtures load the panel beyond one channel", fit
-    level = critical_p(family_size(context.apl_testable))
-    extra = max(fit.dof_power + 1 - fit.dof, 1)
-    f_gain = ((fit.chi2_power - fit.chi2) / extra) / max(fit.chi2 / max(fit.dof, 1), 1.0)
-    p_gain = f_sf(max(f_gain, 0.0), extra, max(fit.dof, 1))
-    shown = bool(p_gain <= level and fit.loss > 0)
+    p_gain = _gain_p(fit)
+    shown = bool(p_gain <= critical_p(family_size(context.apl_testable)) and fit.loss > 0)
     return shown, (f"{fit.describe()}: with the {loaded} greys and mixtures that load the panel "
                    f"beyond one channel, the load gain lowers χ² from {fit.chi2_power:.0f} to "
                    f"{fit.chi2:.0f}, p {p_gain:.2g}"), fit
