@@ -67,7 +67,8 @@ def _measured(display, rgb, rng):
     x = XYZ[:, 0] / S + 2e-4 * rng.standard_normal(len(rgb))
     y = XYZ[:, 1] / S + 2e-4 * rng.standard_normal(len(rgb))
     Y = XYZ[:, 1] * gain
-    return np.column_stack([x * Y / y, Y, (1 - x - y) * Y / y]) + 0.002 * rng.standard_normal((len(rgb), 3))
+    floor = 0.002 * rng.standard_normal((len(rgb), 3))
+    return np.column_stack([x * Y / y, Y, (1 - x - y) * Y / y]) + floor
 
 
 def _session(display, seed, mixtures=()):

@@ -95,7 +95,7 @@ class PowerLimitFit:
     chi2_power: float
     dof_power: int
     full_XYZ: tuple | None = None  # undimmed primaries' XYZ (rows: channels), where fitted in XYZ
-    black_offset_XYZ: tuple | None = None  # the black as the rows see it less the black rows', in XYZ
+    black_offset_XYZ: tuple | None = None  # the black as the rows see it less the black rows
 
     @property
     def weights(self) -> np.ndarray:
