@@ -259,7 +259,7 @@ def refine_in_XYZ(context: DiagnosisContext, fit: PowerLimitFit, mixtures: bool 
     XYZ = np.concatenate(rows_XYZ)
     whiten = _whitened(context.noise, XYZ + black, np.concatenate(rows_n))
     full = np.array([s.full_XYZ for s in context.sweeps])
-    undimmed = full / fit.gain(fit.weights * 1.0)[:, None]
+    undimmed = full / fit.gain(fit.weights)[:, None]  # each primary at its own full load
     start = np.concatenate([fit.gamma, undimmed.reshape(-1), [fit.loss, fit.knee, fit.shape],
                             fit.black_offset_Y * context.white / context.white[1]])
 
