@@ -81,7 +81,10 @@ class PowerLimitFit:
 
     ``chi2`` and ``dof`` are of the sweeps and whites under this model;
     ``chi2_power`` of the same rows under plain power laws (no load gain,
-    each sweep normalized by its own full-drive point, the white free).
+    each sweep normalized by its own full-drive point, the white free). All
+    four are of the luminance fit (:func:`fit_power_limit`): a fit refined in
+    X, Y and Z (:func:`refine_in_XYZ`, ``full_XYZ`` set) carries those of the
+    luminance fit it started from, which the load gain's F-test reads.
     """
 
     gamma: tuple
@@ -238,7 +241,9 @@ def refine_in_XYZ(context: DiagnosisContext, fit: PowerLimitFit, mixtures: bool 
     rows see it less the measured black, is free in X, Y and Z: the black rows' noise is
     subtracted from every row, and a dark sweep point's chromaticity carries it (with ``δ``
     along the white's chromaticity only, the primaries' chromaticities absorbed the rest: on a
-    knee of the peer bench, 0.0006 off in x where one reading at full drive is 0.0002 off)."""
+    knee of the peer bench, 0.0006 off in x where one reading at full drive is 0.0002 off).
+    ``chi2``, ``dof``, ``chi2_power`` and ``dof_power`` stay those of ``fit`` (the luminance
+    fit's, read by the load gain's F-test, never by the refinement)."""
     black = context.black
     rows_d, rows_XYZ, rows_n = [], [], []
     for sweep in context.sweeps:
