@@ -239,7 +239,18 @@ def _with_drift_references(validation, seconds) -> tuple:
     pair a bluish black beside a step of seed 42001 had the step between its last two whites
     (0.058 → 0.762; with the pair 0.029). The largest with it is a power limit of seed 43001
     whose cross-validated model choice one more white row tipped from the extension (0.048) to
-    the grey ramp with sweeps (0.273)."""
+    the grey ramp with sweeps (0.273).
+
+    Six last whites, tried and not kept (the drift sessions and the clean displays of the same
+    400, 96 sessions; warm-ups, declines, steps, wanders and a bluish black beside a step). Read
+    as six references: misses 9 → 5, mean hidden ΔE00 0.0413 → 0.0392, but three drifts got a
+    false ``channel-interaction`` (the white, now well known, against primaries whose drift
+    correction's own error no test carries; a warm-up 0.027 → 0.073), and the drift curve, a
+    smoother over the references' order, bent through the six readings' noise. Averaged into one
+    reference of six readings: misses 9 → 7, mean 0.0420 (a bluish black beside a step 0.038 →
+    0.180), and a decline's drift test lost (0.054 → 0.100). On two warm-ups both ways the six
+    readings' mean sat 0.24–0.5 % below the truth at the end, 2.6 of its standard errors: the
+    closing readings are not the cheap fix they look."""
     out = []
     for patch, white in zip(validation, _white_before([seconds([p]) for p in validation])):
         if white:
