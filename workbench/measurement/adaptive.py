@@ -248,9 +248,9 @@ def _with_drift_references(validation, seconds) -> tuple:
     correction's own error no test carries; a warm-up 0.027 → 0.073), and the drift curve, a
     smoother over the references' order, bent through the six readings' noise. Averaged into one
     reference of six readings: misses 9 → 7, mean 0.0420 (a bluish black beside a step 0.038 →
-    0.180), and a decline's drift test lost (0.054 → 0.100). On two warm-ups (seeds 41001, 42003) the
-    exported white was 0.24 % and 0.49 % off the truth (one too bright, one too dim), each 2.6
-    standard errors of six readings' mean: not explained yet, so the pair stays."""
+    0.180), and a decline's drift test lost (0.054 → 0.100). On two warm-ups (seeds 41001 and
+    42003) the exported white was 0.49 % and 0.24 % off the truth (one too dim, one too bright),
+    each 2.6 standard errors of six readings' mean: not explained yet, so the pair stays."""
     out = []
     for patch, white in zip(validation, _white_before([seconds([p]) for p in validation])):
         if white:
