@@ -334,6 +334,22 @@ def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=N
     ``tone_candidates`` are the forms the BIC chooses among otherwise;
     ``interaction_exponent`` is the co-drive ``p`` where the greys cannot
     choose it (:data:`MATERIALITY_INTERACTION_EXPONENT` to judge materiality).
+
+    Tried and not kept: each full-drive primary estimated with the whites as well, where no
+    ``channel-interaction`` term is fitted (additive: ``W − K = Σ P``, so the generalized
+    least-squares estimate is ``P_c + C_c V⁻¹ (W − K − Σ P)``, ``C_c`` a primary's covariance and
+    ``V`` that of the white's departure as the additivity test reads it), the tone curves refitted
+    relative to the moved full-drive points. On the extension alone it is a clear gain: the paper
+    plan's 8 clean displays of seeds 47000–47007 scored 0.087 → 0.070 mean ΔE00 on hidden colours,
+    a leak 0.088 → 0.074, a bluish black 0.162 → 0.131, a warm-up 0.107 → 0.091; and in the
+    diagnosis, on 58 held-back real LCD charts, five ThinkPad X61 sessions that export the
+    extension 0.48–0.60 → 0.37–0.44. But it also predicts a held-out white from the other whites,
+    where the whites weigh a third of the cross-validated score, so it won the model choice from
+    the grey ramp where the grey ramp was better: on the peer bench's seeds 45000–45009 (180
+    sessions) 22 better and 14 worse (mean 0.1076 → 0.1055, a new false ``channel-interaction``
+    beside a step), and four real charts went from within 0.02 ΔE00 of the seed authors' method
+    to beyond it (a Dell U2718Q 0.424 → 0.491). Offered as a candidate of its own, judged on the
+    rows other than the whites, it may keep the gain.
     """
     effects = set(effects)
     interaction = (_interaction_term(context, interaction_exponent)
