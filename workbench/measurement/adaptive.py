@@ -244,9 +244,10 @@ def _with_drift_references(validation, seconds) -> tuple:
     Six last whites, tried and not kept (the drift sessions and the clean displays of the same
     400, 96 sessions; warm-ups, declines, steps, wanders and a bluish black beside a step). Read
     as six references: misses 9 → 5, mean hidden ΔE00 0.0413 → 0.0392, but three drifts got a
-    false ``channel-interaction`` (the white, now well known, against primaries whose drift
-    correction's own error no test carries; a warm-up 0.027 → 0.073), and the drift curve, a
-    smoother over the references' order, bent through the six readings' noise. Averaged into one
+    false ``channel-interaction`` (a warm-up 0.027 → 0.073: the additivity test then weighs a
+    better-known white against primaries read at other moments, and carries no error of the
+    drift correction between them), and the drift curve, a smoother over the references'
+    order, bent through the six readings' noise. Averaged into one
     reference of six readings: misses 9 → 7, mean 0.0420 (a bluish black beside a step 0.038 →
     0.180), and a decline's drift test lost (0.054 → 0.100). On two warm-ups (seeds 41001 and
     42003) the exported white was 0.49 % and 0.24 % off the truth (one too dim, one too bright),
