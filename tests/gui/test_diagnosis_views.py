@@ -152,3 +152,9 @@ def test_without_times_the_white_references_are_drawn_against_row_order(tmp_path
     view = views.white_reference_view(diagnosis)
     assert view.x_label == "row (no times: row order)"
     np.testing.assert_allclose(view.series[0].x, diagnosis.context.drift.times)  # rows, not minutes
+    # the HTML report draws them on the same axes
+    from workbench.diagnostics.report import _drift_figure
+
+    axis = _drift_figure(diagnosis).axes[0]
+    assert (axis.get_xlabel(), axis.get_ylabel()) == (view.x_label, view.y_label)
+    np.testing.assert_allclose(axis.lines[0].get_xdata(), view.series[0].x)

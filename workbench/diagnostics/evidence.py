@@ -18,7 +18,8 @@ from workbench.errors import InputError
 from workbench.session import Session
 
 __all__ = ["DriftCorrection", "ChannelSweep", "STEP_EDF", "TIME_BASES", "drift_references",
-           "channel_sweeps", "fit_chromaticity_drift", "partial_greys", "settled_reference", "xy_of",
+           "channel_sweeps", "fit_chromaticity_drift", "partial_greys", "settled_reference",
+           "white_reference_axes", "xy_of",
            "MIN_CHROMATICITY_OUTPUT"]
 
 
@@ -275,6 +276,16 @@ def _best_step(gains: np.ndarray, sd: np.ndarray) -> np.ndarray:
 
 TIME_BASES = ("time", "row order")
 """How a session orders its drift references: its times, or its row order (no times)."""
+
+
+def white_reference_axes(time_basis: str) -> tuple[float, str, str]:
+    """How a plot of the white references over the session draws them: ``(scale, x label,
+    y label)``, the references' times times ``scale`` along x (minutes, or row numbers where the
+    session has no times) and their gains in % of the settled state along y. The report and the
+    window both draw them so."""
+    if time_basis == "row order":
+        return 1.0, "row (no times: row order)", "white Y, % of final"
+    return 1.0 / 60, "session time, min", "white Y, % of final"
 
 
 def drift_references(session: Session, copies: np.ndarray | None = None

@@ -23,7 +23,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from workbench import __version__
-from workbench.diagnostics.evidence import channel_sweeps, xy_of
+from workbench.diagnostics.evidence import channel_sweeps, white_reference_axes, xy_of
 from workbench.diagnostics.selection import Diagnosis
 from workbench.fileio import atomic_writer
 
@@ -106,16 +106,15 @@ def _drift_figure(diagnosis: Diagnosis) -> Figure | None:
         return None
     figure = Figure(figsize=(5, 3.2), layout="constrained")
     axis = figure.subplots()
-    by_rows = diagnosis.context.time_basis == "row order"
-    scale = 1.0 if by_rows else 1.0 / 60
+    scale, x_label, y_label = white_reference_axes(diagnosis.context.time_basis)
     axis.plot(drift.times * scale, 100 * drift.gains, "o", color="#444", label="white references")
     if diagnosis.context.drift_found:
         # the correction as applied: the references smoothed to their noise, ramped between them
         t, gain = drift.sampled()
         axis.plot(t * scale, 100 * gain, "-", color="#2e6fd0", label="correction")
         axis.legend(fontsize="small")
-    axis.set_xlabel("row (no times: row order)" if by_rows else "session time, min")
-    axis.set_ylabel("white Y, % of final")
+    axis.set_xlabel(x_label)
+    axis.set_ylabel(y_label)
     axis.set_title("white references vs time")
     return figure
 

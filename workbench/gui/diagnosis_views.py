@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import colour
 import numpy as np
 
-from workbench.diagnostics.evidence import channel_sweeps, xy_of
+from workbench.diagnostics.evidence import channel_sweeps, white_reference_axes, xy_of
 from workbench.diagnostics.report import split_consequence
 
 __all__ = [
@@ -207,14 +207,12 @@ def white_reference_view(diagnosis) -> PlotView | None:
     drift = diagnosis.context.drift
     if drift is None:
         return None
-    by_rows = diagnosis.context.time_basis == "row order"
-    scale = 1.0 if by_rows else 1.0 / 60
+    scale, x_label, y_label = white_reference_axes(diagnosis.context.time_basis)
     series = (Series("white", drift.times * scale, 100 * drift.gains, 3),)
     if diagnosis.context.drift_found:
         t, gain = drift.sampled()
         series += (Series("correction", t * scale, 100 * gain, 2, points=False),)
-    return PlotView("white references", "row (no times: row order)" if by_rows else
-                    "session time, min", "white Y, % of final", series)
+    return PlotView("white references", x_label, y_label, series)
 
 
 @dataclass(frozen=True)
