@@ -128,6 +128,9 @@ __all__ = [
     "detect_chromaticity_shift",
     "detect_tone_curve_shape",
     "tone_data",
+    "additivity_p_value",
+    "mean_covariance",
+    "white_against_sum",
 ]
 
 CHANNEL_NAMES = ("red", "green", "blue")
@@ -422,7 +425,7 @@ def detect_black_offset(context: DiagnosisContext) -> DetectorResult:
     # light has all three tristimulus values: the black as a whole must stand out of the noise
     # too (χ² on 3 dof), or a Y read high by one heavy-tailed reading, at a chromaticity no
     # light has, is named a black level
-    covariance = _mean_covariance(noise, context.black, context.black_count)
+    covariance = mean_covariance(noise, context.black, context.black_count)
     chi2 = float(context.black @ np.linalg.solve(covariance, context.black))
     p_XYZ = f_sf(chi2 / 3, 3, noise.dof if np.isfinite(noise.dof) else 10 ** 6)
     p = max(p_Y, p_XYZ)
@@ -436,13 +439,13 @@ def detect_black_offset(context: DiagnosisContext) -> DetectorResult:
                     "p_Y": p_Y, "p_XYZ": p_XYZ}, z=z if p == p_Y else None)
 
 
-def _mean_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int) -> np.ndarray:
+def mean_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int) -> np.ndarray:
     """Covariance of the mean of ``count`` measurements of ``XYZ`` (the chromaticity noise included)."""
     return noise.covariance(XYZ) / max(count, 1)
 
 
 def _mean_chromaticity_covariance(noise: NoiseModel, XYZ: np.ndarray, count: int) -> np.ndarray:
-    """The chromaticity noise's part of :func:`_mean_covariance`."""
+    """The chromaticity noise's part of :func:`mean_covariance`."""
     return noise.chromaticity_covariance(XYZ) / max(count, 1)
 
 
@@ -467,14 +470,28 @@ def _scale_dof(noise: NoiseModel, covariance: np.ndarray, chromatic: np.ndarray,
     return float(1.0 / ((1.0 - share) ** 2 / noise.dof + share ** 2 / noise.xy_dof))
 
 
+def _additivity_test(noise: NoiseModel, difference: np.ndarray, covariance: np.ndarray,
+                     chromatic: np.ndarray) -> tuple[float, float]:
+    """(χ², p) of the white's departure from R+G+B (:func:`white_against_sum`) on 3 dof."""
+    chi2 = float(difference @ np.linalg.solve(covariance, difference))
+    # the noise is estimated: F, not χ²
+    return chi2, f_sf(chi2 / 3, 3, _scale_dof(noise, covariance, chromatic))
+
+
+def additivity_p_value(context: DiagnosisContext) -> float | None:
+    """The p-value of :func:`detect_channel_interaction`'s test (None where no white was
+    measured): how well the white less the black is the sum of the full-drive primaries."""
+    if context.white_count == 0:
+        return None
+    white, summed, covariance, chromatic = white_against_sum(context)
+    return _additivity_test(context.noise, white - summed, covariance, chromatic)[1]
+
+
 def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
     if context.white_count == 0:
         return _untestable("channel-interaction", "no white measured beside the primaries")
-    white, summed, covariance, chromatic = _white_against_sum(context)
-    difference = white - summed
-    chi2 = float(difference @ np.linalg.solve(covariance, difference))
-    # the noise is estimated: F, not χ²
-    p = f_sf(chi2 / 3, 3, _scale_dof(context.noise, covariance, chromatic))
+    white, summed, covariance, chromatic = white_against_sum(context)
+    chi2, p = _additivity_test(context.noise, white - summed, covariance, chromatic)
     ratio = white / summed
     statistic = 1.0 - float(ratio[1])
     standard_error = float(np.sqrt(covariance[1, 1]) / summed[1])
@@ -605,7 +622,7 @@ def greys_against_sum(context: DiagnosisContext) -> GreysAgainstSum | None:
                                                             - rgb[rows[i], 0] / 255.0)))]
                 block = block + u ** 2 * np.outer(part, part)
         covariance[3 * i:3 * i + 3, 3 * i:3 * i + 3] = block
-    shared = 4.0 * _mean_covariance(noise, context.black, context.black_count)
+    shared = 4.0 * mean_covariance(noise, context.black, context.black_count)
     covariance += np.kron(np.ones((n, n)), shared)
     chi2 = float(difference @ np.linalg.solve(covariance, difference))
     dof = 3 * n
@@ -616,7 +633,7 @@ def greys_against_sum(context: DiagnosisContext) -> GreysAgainstSum | None:
                            high=float(ratios.max()))
 
 
-def _white_against_sum(context: DiagnosisContext):
+def white_against_sum(context: DiagnosisContext):
     """(white − black, Σ black-subtracted full primaries, covariance of their difference, its
     chromaticity-noise part).
 
@@ -630,7 +647,7 @@ def _white_against_sum(context: DiagnosisContext):
     measured = [(context.white, context.white_count, 1.0),
                 (context.black, context.black_count, 4.0)]
     measured += [(s.full_XYZ + context.black, s.full_count, 1.0) for s in context.sweeps]
-    covariance = sum(w * _mean_covariance(noise, XYZ, n) for XYZ, n, w in measured)
+    covariance = sum(w * mean_covariance(noise, XYZ, n) for XYZ, n, w in measured)
     chromatic = sum(w * _mean_chromaticity_covariance(noise, XYZ, n) for XYZ, n, w in measured)
     drifting = unexplained_gain_variance(context)
     if drifting > 0:  # the primaries were read at other moments than the whites
@@ -701,7 +718,7 @@ def common_gain_test(context: DiagnosisContext) -> CommonGainTest | None:
     """
     if context.white_count == 0:
         return None
-    white, summed, covariance, chromatic = _white_against_sum(context)
+    white, summed, covariance, chromatic = white_against_sum(context)
     inverse = np.linalg.inv(covariance)
     gain = float(summed @ inverse @ white / (summed @ inverse @ summed))
     left = white - gain * summed
@@ -737,7 +754,7 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
     usable = sweep.output >= MIN_CHROMATICITY_OUTPUT
     if usable.sum() < 4:
         return None
-    black_cov = _mean_covariance(context.noise, context.black, context.black_count)
+    black_cov = mean_covariance(context.noise, context.black, context.black_count)
     u = 1.0 - sweep.drive[usable]
     xy = xy_of(sweep.XYZ[usable])
     points = int(usable.sum())
@@ -748,7 +765,7 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
         total = float(np.sum(subtracted))
         x, y = subtracted[0] / total, subtracted[1] / total
         jacobian = np.array([[1 - x, -x, -x], [-y, 1 - y, -y]]) / total
-        covariance[2 * i:2 * i + 2, 2 * i:2 * i + 2] = jacobian @ _mean_covariance(
+        covariance[2 * i:2 * i + 2, 2 * i:2 * i + 2] = jacobian @ mean_covariance(
             context.noise, subtracted + context.black, int(sweep.counts[index])) @ jacobian.T
         design = np.zeros((2, 9))
         design[0, :3] = [1.0, u[i], u[i] ** 2]
