@@ -83,7 +83,8 @@ def _model_lines(result) -> list[str]:
                        + (" (exported)" if name == choice["chosen"] else "")
                        for name, value in choice["cv_mean_dE00"].items())
     return [f"model     {choice['chosen']} exported: {choice['reason']}",
-            f"          cross-validated mean ΔE00 on the fit rows: {scores}"]
+            f"          cross-validated mean ΔE00 on the fit rows: {scores}",
+            f"          full-drive primaries {choice.get('primaries') or 'as measured'}"]
 
 
 def _print_text(diagnosis) -> None:

@@ -62,7 +62,8 @@ from workbench.errors import InputError
 
 __all__ = ["MODEL_CANDIDATES", "GREY_RAMP_CANDIDATES", "WEIGHTED_CANDIDATES",
            "ALTERNATIVE_CANDIDATES", "IDENTIFIED_CANDIDATES", "NOISE_TESTED_CANDIDATES",
-           "SPARSE_SWEEP_LEVELS", "COARSE_GREY_STEP", "PAPERS_MODELS", "ModelChoice", "choose_model",
+           "SPARSE_SWEEP_LEVELS", "COARSE_GREY_STEP", "PAPERS_MODELS", "PRIMARIES_AS_MEASURED",
+           "ModelChoice", "choose_model",
            "bends_between_greys", "coarse_grey_ramp", "fit_candidate", "has_grey_ramp",
            "has_sparse_sweep"]
 
@@ -357,23 +358,32 @@ def bends_between_greys(context: DiagnosisContext) -> bool:
     return has_sparse_sweep(context) or _coarse_greys(context, 2)
 
 
+PRIMARIES_AS_MEASURED = "as measured"
+""":attr:`ModelChoice.primaries` where the exported model's full-drive primaries are the readings'
+means (:func:`~workbench.diagnostics.extension.white_constrained` not applied)."""
+
+
 @dataclass(frozen=True)
 class ModelChoice:
     """The exported model's candidate id, every candidate's cross-validated error, and why.
 
     ``cv_mean_dE00`` maps candidate id → cross-validated mean ΔE00 of the fit
-    rows (inf where a fold could not be fitted, absent where not applicable).
+    rows (inf where a fold could not be fitted, absent where not applicable);
+    ``primaries`` says how the exported model's full-drive primaries were estimated
+    (:data:`PRIMARIES_AS_MEASURED`, or with the white references).
     """
 
     chosen: str
     cv_mean_dE00: dict = field(default_factory=dict)
     reason: str = ""
+    primaries: str = PRIMARIES_AS_MEASURED
 
     def to_json(self) -> dict:
         return {"chosen": self.chosen, "description": MODEL_CANDIDATES[self.chosen],
                 "cv_mean_dE00": {k: (v if np.isfinite(v) else None)
                                  for k, v in self.cv_mean_dE00.items()},
-                "reason": self.reason, "candidates": dict(MODEL_CANDIDATES)}
+                "reason": self.reason, "candidates": dict(MODEL_CANDIDATES),
+                "primaries": self.primaries}
 
 
 def choose_model(context: DiagnosisContext, current: str, current_errors, baseline_errors,

@@ -170,7 +170,8 @@ def _model_choice_section(choice: dict | None) -> str:
     return (f"<h2>Exported model: {html.escape(choice['chosen'])}</h2>"
             "<table><tr><th>candidate</th><th>what it is</th><th>cross-validated mean ΔE00 "
             f"(fit rows)</th><th></th></tr>{rows}</table>"
-            f"<p>{html.escape(choice['reason'].rstrip('.'))}.</p>")
+            f"<p>{html.escape(choice['reason'].rstrip('.'))}.</p>"
+            f"<p>Full-drive primaries {html.escape(choice.get('primaries') or 'as measured')}.</p>")
 
 
 def render_report(diagnosis: Diagnosis) -> str:

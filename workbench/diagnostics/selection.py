@@ -47,6 +47,7 @@ from workbench.diagnostics.detectors import (
     APL_EFFECT,
     DetectorResult,
     DiagnosisContext,
+    additivity_p_value,
     build_context,
     run_detectors,
     family_size,
@@ -65,6 +66,7 @@ from workbench.diagnostics.extension import (
     MATERIALITY_INTERACTION_EXPONENT,
     PARAMETRIC_TONE_FORMS,
     TERMS,
+    constrained_by_whites,
     fit_extended,
     fitted_on,
 )
@@ -402,13 +404,19 @@ def diagnose(session: Session) -> Diagnosis:
     if terms and "temporal-drift" not in terms and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
                                 load_session=load_session)
-    extended = (fit_extended(context, terms, baseline, tone_forms)
+    extended = (fit_extended(context, terms, baseline, tone_forms, with_whites=True)
                 if cross_validation.get("use_extension") else baseline)
     choice = _choose_model(context, extended is not baseline, terms, cross_validation, baseline,
                            cross_validation.get("tone_forms") or tone_forms,
                            power_limit == "identified", found,
                            power_limit_offered=power_limit == "offered",
                            power_limit_shown=power_limit == "shown")
+    if choice.chosen == "extension" and constrained_by_whites(context, terms):
+        choice = replace(choice, primaries=(
+            f"estimated with the {context.white_count} white references as well: the white less "
+            f"the black is their sum within noise (additivity test p "
+            f"{additivity_p_value(context):.2f}), so each moves by its share of the white's "
+            "departure"))
     by_effect = dict(cross_validation["by_effect"])
     if choice.chosen in ALTERNATIVE_CANDIDATES:
         drift_in = "temporal-drift" in terms and extended is not baseline
@@ -572,7 +580,7 @@ def _attribution(context: DiagnosisContext, found, baseline, validation: Session
             rebuilt = build_context(context.raw, drift_found=False, noise=context.noise)
         else:
             rebuilt = context
-        model = fit_extended(rebuilt, effects, baseline, tone_forms)
+        model = fit_extended(rebuilt, effects, baseline, tone_forms, with_whites=True)
         return float(np.mean(_score_extended(model, rebuilt, effects, validation, white)))
 
     return {

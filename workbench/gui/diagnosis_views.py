@@ -22,6 +22,7 @@ import colour
 import numpy as np
 
 from workbench.diagnostics.evidence import channel_sweeps, white_reference_axes, xy_of
+from workbench.diagnostics.model_choice import PRIMARIES_AS_MEASURED
 from workbench.diagnostics.report import split_consequence
 
 __all__ = [
@@ -422,9 +423,13 @@ def model_choice_rows(diagnosis) -> tuple:
 
 
 def model_choice_reason(diagnosis) -> str:
-    """Why the exported model was chosen ("" without a choice)."""
+    """Why the exported model was chosen ("" without a choice), and its primaries where they were
+    estimated with the white references."""
     choice = diagnosis.to_json().get("model_choice") or {}
-    return str(choice.get("reason") or "")
+    primaries = str(choice.get("primaries") or PRIMARIES_AS_MEASURED)
+    reason = str(choice.get("reason") or "")
+    return reason if primaries == PRIMARIES_AS_MEASURED else (
+        f"{reason.rstrip('.')}. Full-drive primaries {primaries}.")
 
 
 VERDICT_KEYS = ("session", "baseline", "extended", "gain")

@@ -1,0 +1,120 @@
+"""Full-drive primaries estimated with the white references as well, where the white is their sum.
+
+On an additive display the white less the black is the sum of the full-drive primaries, and the
+white references, read many times, say what each primary's one or two readings cannot. The
+extension moves each primary by the generalized least-squares step
+(:func:`~workbench.diagnostics.extension.white_constrained`) wherever the additivity test finds
+the white the sum within noise, and never where it does not (a panel that dims the white: the
+step would hide the shortfall that names the interaction), nor beside an interaction term or
+flexible tone curves. The diagnosis decides its terms and its model without the step and
+exports the extension with it.
+
+The sessions come from the independent generator (its own noise: a t-distributed gain, a
+per-coordinate part, shot noise and a dark floor); the truth is its noiseless display.
+"""
+
+import html
+
+import numpy as np
+import pytest
+
+from tests.diagnostics.independent_generator import generate_session, hidden_colours
+from workbench.colorimetry import delta_E2000
+from workbench.diagnostics import diagnose
+from workbench.diagnostics.detectors import build_context
+from workbench.diagnostics.extension import constrained_by_whites, fit_extended, white_constrained
+from workbench.diagnostics.model_choice import PRIMARIES_AS_MEASURED
+from workbench.diagnostics.report import render_report
+from workbench.gui.diagnosis_views import model_choice_reason
+
+SEEDS = range(8)
+RGB = np.array([[10.0, 120.0, 250.0], [200.0, 30.0, 90.0], [255.0, 255.0, 255.0]])
+
+
+def _context(effects, seed, noise=0.004):
+    generated = generate_session(effects, seed=seed, noise=noise)
+    return generated, build_context(generated.session.without("validation"))
+
+
+def _primary_errors(generated, context):
+    """Each channel's full-drive XYZ less the black, against the true display's (relative)."""
+    true = generated.display.light(np.array([[255.0, 0, 0], [0, 255.0, 0], [0, 0, 255.0],
+                                             [0, 0, 0]]))
+    truth = true[:3] - true[3]
+    measured = np.array([s.full_XYZ for s in context.sweeps])
+    return np.abs(measured - truth) / truth[:, 1:2]
+
+
+@pytest.fixture(scope="module")
+def clean():
+    return [_context(None, seed) for seed in SEEDS]
+
+
+def test_the_whites_bring_the_primaries_closer_to_the_truth(clean):
+    before, after = [], []
+    for generated, context in clean:
+        assert constrained_by_whites(context, ())
+        moved = white_constrained(context)
+        before.append(_primary_errors(generated, context).mean())
+        after.append(_primary_errors(generated, moved).mean())
+    assert np.mean(after) < 0.8 * np.mean(before), (before, after)
+
+
+def test_the_extension_predicts_hidden_colours_better_with_the_whites(clean):
+    rgb = hidden_colours(300, 1)
+    plain, constrained = [], []
+    for generated, context in clean:
+        truth = generated.display.light(rgb)
+        white = generated.display.light(np.array([[255.0, 255.0, 255.0]]))[0]
+        constrained.append(delta_E2000(fit_extended(context, (), with_whites=True).forward(rgb), truth,
+                                       white).mean())
+        plain.append(delta_E2000(fit_extended(context, ()).forward(rgb),
+                                 truth, white).mean())
+    assert np.mean(constrained) < 0.9 * np.mean(plain), (plain, constrained)
+
+
+def test_a_white_that_is_not_the_sum_or_a_flexible_tone_curve_moves_nothing():
+    generated, context = _context({"channel-interaction": "power-limit"}, seed=3, noise=0.002)
+    assert not constrained_by_whites(context, ())
+    assert white_constrained(context) is None
+    clean_context = _context(None, 0)[1]
+    assert white_constrained(clean_context) is not None
+    for term in ("channel-interaction", "tone-curve-shape"):  # nor beside these terms
+        assert not constrained_by_whites(clean_context, (term,))
+        np.testing.assert_allclose(
+            fit_extended(clean_context, (term,), with_whites=True).forward(RGB),
+            fit_extended(clean_context, (term,)).forward(RGB))
+
+
+def test_the_diagnosis_exports_the_step_and_says_so():
+    """Term selection and the model choice decide without the step; the exported extension
+    has it, and the JSON, the CLI's text and the report say how its primaries were estimated."""
+    generated = generate_session("bluish + log-desaturation", seed=0, plan="paper+greys")
+    diagnosis = diagnose(generated.session)
+    assert diagnosis.model_choice.chosen == "extension"
+    terms = [r.effect for r in diagnosis.findings if r.in_model]
+    assert constrained_by_whites(diagnosis.context, terms)
+    np.testing.assert_allclose(
+        diagnosis.extended.forward(RGB),
+        fit_extended(diagnosis.context, terms, diagnosis.baseline,
+                     [c.form for c in diagnosis.extended.tone], with_whites=True).forward(RGB))
+    rgb = hidden_colours(300, 0)
+    truth = generated.display.light(rgb)
+    unmoved = fit_extended(diagnosis.context, terms, diagnosis.baseline,
+                           [c.form for c in diagnosis.extended.tone])
+    exported = delta_E2000(diagnosis.extended.forward(rgb), truth, diagnosis.white).mean()
+    without = delta_E2000(unmoved.forward(rgb), truth, diagnosis.white).mean()
+    assert exported < without, (exported, without)
+    primaries = diagnosis.to_json()["model_choice"]["primaries"]
+    assert primaries.startswith("estimated with the 11 white references as well"), primaries
+    assert "additivity test p" in primaries
+    assert html.escape(f"Full-drive primaries {primaries}") in render_report(diagnosis)
+    assert primaries in model_choice_reason(diagnosis)
+
+
+def test_a_model_other_than_the_extension_keeps_its_primaries_as_measured():
+    generated = generate_session({"tone-curve-shape": "shoulder"}, seed=0, plan="paper+greys")
+    diagnosis = diagnose(generated.session)
+    assert diagnosis.model_choice.chosen != "extension"
+    assert diagnosis.to_json()["model_choice"]["primaries"] == PRIMARIES_AS_MEASURED
+    assert model_choice_reason(diagnosis) == diagnosis.model_choice.reason
