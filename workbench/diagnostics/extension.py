@@ -437,6 +437,10 @@ def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=N
       desaturations 0.0791 → 0.0745, warm-ups beside sweeps 0.0639 → 0.0601, a bluish black
       beside a step 0.066 → 0.085); seeds 46000–46009, 10 better and 2 worse (0.1116 →
       0.1104). No session newly worse than the seed authors' method.
+    - ``bench plans`` (400 displays, hidden colours): the paper plan 0.1527 → 0.1439 (120 better,
+      10 worse; a lit black 0.140 → 0.014), the adaptive plan 0.0681 → 0.0665 (44 better, 2
+      worse). The adaptive plan reads each primary up to six times, so it gains less, and where
+      it exports the grey ramp it gets no step: its misses of the paper plan + 0.02 went 19 → 34.
     - Diagnosis suite (940 sessions): 137 better and 30 worse on their validation colours;
       sessions with an effect whose gain over the paper's model is ≥ 30 % 76.9 → 79.8 %, the
       median gain 76.9 → 77.7 %; one more loss beyond noise (5 → 6: a warm-up that lost
