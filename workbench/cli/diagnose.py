@@ -76,6 +76,8 @@ def _finding_line(i, finding) -> str:
 
 def _model_lines(result) -> list[str]:
     """Which model the profile exports and why, and every candidate's cross-validated error."""
+    from workbench.diagnostics.model_choice import PRIMARIES_AS_MEASURED
+
     choice = result.get("model_choice")
     if not choice:
         return []
@@ -84,7 +86,7 @@ def _model_lines(result) -> list[str]:
                        for name, value in choice["cv_mean_dE00"].items())
     return [f"model     {choice['chosen']} exported: {choice['reason']}",
             f"          cross-validated mean ΔE00 on the fit rows: {scores}",
-            f"          full-drive primaries {choice.get('primaries') or 'as measured'}"]
+            f"          full-drive primaries {choice.get('primaries') or PRIMARIES_AS_MEASURED}"]
 
 
 def _print_text(diagnosis) -> None:

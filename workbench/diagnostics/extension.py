@@ -351,8 +351,8 @@ def white_constrained(context: DiagnosisContext) -> DiagnosisContext | None:
     where :func:`constrained_by_whites` refuses it for a model with no term).
 
     Under an additive model (no ``channel-interaction``) the white less the black is the sum of
-    the full-drive primaries, so the white references, read ten times or more, say what a
-    primary's few readings alone cannot: the generalized least-squares estimate moves each
+    the full-drive primaries, so the white references (ten or more on the built-in plans, one
+    or two on a chart) say what a primary's few readings alone cannot: the generalized least-squares estimate moves each
     primary by its own covariance times the inverse covariance of the white's departure from
     R+G+B times that departure, ``P_c + C_c V⁻¹ (W − K − Σ P)`` (``V`` as the additivity test
     reads it, :func:`~workbench.diagnostics.detectors.white_against_sum`, drift included). The

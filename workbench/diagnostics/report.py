@@ -24,6 +24,7 @@ from matplotlib.figure import Figure
 
 from workbench import __version__
 from workbench.diagnostics.evidence import channel_sweeps, white_reference_axes, xy_of
+from workbench.diagnostics.model_choice import PRIMARIES_AS_MEASURED
 from workbench.diagnostics.selection import Diagnosis
 from workbench.fileio import atomic_writer
 
@@ -171,7 +172,8 @@ def _model_choice_section(choice: dict | None) -> str:
             "<table><tr><th>candidate</th><th>what it is</th><th>cross-validated mean ΔE00 "
             f"(fit rows)</th><th></th></tr>{rows}</table>"
             f"<p>{html.escape(choice['reason'].rstrip('.'))}.</p>"
-            f"<p>Full-drive primaries {html.escape(choice.get('primaries') or 'as measured')}.</p>")
+            f"<p>Full-drive primaries "
+            f"{html.escape(choice.get('primaries') or PRIMARIES_AS_MEASURED)}.</p>")
 
 
 def render_report(diagnosis: Diagnosis) -> str:
