@@ -365,10 +365,8 @@ def white_constrained(context: DiagnosisContext) -> DiagnosisContext | None:
     if not constrained_by_whites(context, ()):
         return None
     white, summed, covariance, _ = white_against_sum(context)
-    try:
-        solved = np.linalg.solve(covariance, white - summed)
-    except np.linalg.LinAlgError:
-        return None
+    # the additivity test solved this same system in constrained_by_whites
+    solved = np.linalg.solve(covariance, white - summed)
     sweeps = []
     for sweep in context.sweeps:
         full = sweep.full_XYZ + mean_covariance(context.noise, sweep.full_XYZ + context.black,
