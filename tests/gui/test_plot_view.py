@@ -139,3 +139,75 @@ def test_a_resize_makes_room_again_but_keeps_a_range_the_user_chose(qtbot):
     plot.resize(420, 300)
     qtbot.wait(50)
     assert np.allclose(box.viewRange()[1], (-0.05, 0.05))
+
+
+def _shown(plot, view, qtbot):
+    from PySide6.QtWidgets import QApplication
+
+    plot.show_view(view)
+    qtbot.wait(50)
+    for _ in range(5):
+        QApplication.processEvents()
+    return plot.getPlotItem().titleLabel
+
+
+def test_a_title_wider_than_its_plot_shrinks_then_is_shortened_with_its_whole_text_in_the_tooltip(qtbot):
+    from workbench.gui.widgets.plot_view import MIN_TITLE_PT
+
+    plot = ViewPlot()
+    qtbot.addWidget(plot)
+    plot.resize(400, 200)
+    plot.show()
+    series = (Series("red", DRIVE * 255, DRIVE, 0),)
+    title = _shown(plot, PlotView("greys / sum of channels", "DAC", "%", series), qtbot)
+    assert title.item.toPlainText() == "greys / sum of channels" and title.toolTip() == ""
+    wide = title.item.boundingRect().width()
+    plot.setMinimumWidth(0)
+    plot.resize(150, 200)  # narrower than the title at its own size
+    qtbot.wait(50)
+    # the whole title, in a smaller font, within the width its plot gives it
+    assert title.item.toPlainText() == "greys / sum of channels"
+    assert title.item.boundingRect().width() < wide
+    assert title.item.boundingRect().width() <= title.size().width() + 0.5
+    long = "chromaticity vs drive, every channel, black subtracted"
+    title = _shown(plot, PlotView(long, "DAC", "Δxy", series), qtbot)
+    text = title.item.toPlainText()
+    assert text.endswith("…") and long.startswith(text[:-1]) and len(text) > 12
+    assert title.opts["size"] == f"{MIN_TITLE_PT:g}pt"  # shortened only at the smallest size
+    assert title.item.boundingRect().width() <= title.size().width() + 0.5
+    assert title.toolTip() == long
+    plot.resize(900, 200)  # room again: the whole title at its own size
+    qtbot.wait(50)
+    assert title.item.toPlainText() == long and title.opts["size"] == "10pt"
+    assert title.toolTip() == ""
+
+
+def _bottom_labels(plot):
+    """The x axis's tick labels as drawn: (left, right) pixel extents, left to right."""
+    from PySide6.QtGui import QImage, QPainter
+
+    axis = plot.getPlotItem().getAxis("bottom")
+    image = QImage(10, 10, QImage.Format.Format_ARGB32)
+    painter = QPainter(image)
+    try:
+        _, _, texts = axis.generateDrawSpecs(painter)
+    finally:
+        painter.end()
+    return sorted((rect.left(), rect.right(), text) for rect, _, text in texts)
+
+
+@pytest.mark.parametrize("width", [165, 185, 260, 420])
+def test_the_x_axis_labels_of_a_narrow_plot_leave_gaps_between_them(qtbot, width):
+    plot = ViewPlot()
+    qtbot.addWidget(plot)
+    plot.setMinimumWidth(0)
+    plot.resize(width, 200)
+    plot.show()
+    x = np.arange(40.0, 241.0, 8.0)  # a range under 225 DAC: pyqtgraph put a major tick every 50
+    _shown(plot, PlotView("chromaticity vs drive", "DAC", "Δxy from full drive",
+                          (Series("red", x, 1e-4 * np.sqrt(x), 0),)), qtbot)
+    labels = _bottom_labels(plot)
+    assert len(labels) >= 2, labels
+    gaps = [b[0] - a[1] for a, b in zip(labels, labels[1:])]
+    widths = [right - left for left, right, _ in labels]
+    assert min(gaps) >= 0.5 * max(widths), (labels, gaps)

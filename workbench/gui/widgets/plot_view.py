@@ -14,7 +14,7 @@ from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor
 
 __all__ = ["PALETTE", "pen", "brush", "ViewPlot", "configure_plot", "emptiest_corner", "place_legend",
-           "LegendRoom", "legend_room", "MAX_LEGEND_ROOM"]
+           "LegendRoom", "legend_room", "MAX_LEGEND_ROOM", "MIN_TITLE_PT", "SpacedAxis"]
 
 PALETTE = ("#c0392b", "#27ae60", "#2e6fd0", "#555555", "#e67e22", "#8e44ad")
 """Colours by index: red, green, blue channels, grey, then two more."""
@@ -58,11 +58,100 @@ def configure_plot(plot: pg.PlotItem, title: str, x_label: str, y_label: str) ->
         axis.label.setFont(pg.QtGui.QFont("", 9))
 
 
+LABEL_GAP = 0.5
+"""The least gap between two x-axis tick labels, as a share of the widest label's width."""
+
+
+def _coarser(spacing: float) -> tuple[float, float]:
+    """The next tick spacing of the 1, 2, 5 × 10ⁿ series above ``spacing``, and its minor one."""
+    unit = 10.0 ** np.floor(np.log10(spacing))
+    mantissa = round(spacing / unit)
+    if mantissa < 2:
+        return 2 * unit, unit
+    if mantissa < 5:
+        return 5 * unit, unit
+    return 10 * unit, 2 * unit
+
+
+class SpacedAxis(pg.AxisItem):
+    """An x axis whose major tick labels leave gaps between them (:data:`LABEL_GAP`).
+
+    pyqtgraph chooses the major spacing from the axis's range and length alone and always labels
+    every major tick: a DAC axis of 220 units on a 105-pixel plot (five plots in a row on a
+    1366 × 768 screen) got a major tick every 50 and read "100150200". Here the spacing grows
+    along 1, 2, 5 × 10ⁿ until the labels fit, with the minor ticks of the spacing chosen."""
+
+    def tickSpacing(self, minVal, maxVal, size):
+        levels = super().tickSpacing(minVal, maxVal, size)
+        if (not levels or self._tickSpacing is not None or size <= 0 or maxVal <= minVal
+                or levels[0][0] <= 0 or self.orientation not in ("bottom", "top")):
+            return levels
+        metrics = pg.QtGui.QFontMetricsF(self.style["tickFont"] or self.font())
+        major, chosen = float(levels[0][0]), levels
+        while True:
+            values = np.arange(np.ceil(minVal / major), np.floor(maxVal / major) + 1) * major
+            if values.size < 2:
+                return chosen
+            widest = max(metrics.horizontalAdvance(text)
+                         for text in self.tickStrings(list(values), self.scale, major))
+            if major / (maxVal - minVal) * size >= (1.0 + LABEL_GAP) * widest:
+                return chosen
+            major, minor = _coarser(major)
+            chosen = [(major, 0.0), (minor, 0.0)]
+
+
+MIN_TITLE_PT = 7.5
+"""The smallest font a plot's title shrinks to where its plot is narrower than the title; past
+that it is shortened with an ellipsis and the whole title is the tooltip."""
+
+
 class _Title(pg.LabelItem):
-    """A plot's title that never widens its plot to fit the text: where the plot is narrower
-    (four in a row on a 1366 × 768 screen) the title is cut. pyqtgraph's own title sets its
-    minimum width to the text's, which widened the plot past its cell, and the plot beside it
-    hid the right-hand side of its data."""
+    """A plot's title that never widens its plot to fit the text. pyqtgraph's own title sets its
+    minimum width to the text's, which widened the plot past its cell, and the plot beside it hid
+    the right-hand side of its data. Where the plot is narrower than the title (five in a row on
+    a 1366 × 768 screen) the title is drawn in a smaller font, down to :data:`MIN_TITLE_PT`, and
+    past that shortened with "…" (the whole title in its tooltip): cut at the plot's edge, "greys
+    / sum of channels" had read "greys / sum of chann"."""
+
+    def setText(self, text, **args):
+        self._wanted = (str(text), dict(args))
+        self._fitted = None
+        self._fit()
+
+    def resizeEvent(self, ev):
+        self._fit()
+        super().resizeEvent(ev)
+
+    def _fit(self) -> None:
+        """Draw the wanted title in the largest font from its own size down to
+        :data:`MIN_TITLE_PT` that fits the width it has, else elided at that size."""
+        wanted = getattr(self, "_wanted", None)
+        if wanted is None:
+            return
+        text, args = wanted
+        width = float(self.size().width())
+        if getattr(self, "_fitted", None) == (text, width):
+            return
+        self._fitted = (text, width)
+        size = str(args.get("size", self.opts.get("size", "11pt")))
+        largest = float(size[:-2]) if size.endswith("pt") else 11.0
+        sizes = [largest, *np.arange(largest - 0.5, MIN_TITLE_PT - 0.01, -0.5)]
+        shown = text
+        for pt in sizes:
+            super().setText(text, **{**args, "size": f"{pt:g}pt"})
+            if width <= 0 or self.item.boundingRect().width() <= width:
+                break
+        else:  # too wide even at the smallest size: as many characters as fit, then "…"
+            smallest = {**args, "size": f"{sizes[-1]:g}pt"}
+            low, high = 0, len(text)
+            while low < high:
+                middle = (low + high + 1) // 2
+                super().setText(text[:middle].rstrip() + "…", **smallest)
+                fits = self.item.boundingRect().width() <= width
+                low, high = (middle, high) if fits else (low, middle - 1)
+            shown = text[:low].rstrip() + "…"
+            super().setText(shown, **smallest)
+        self.setToolTip(text if shown != text else "")
 
     def updateMin(self):
         super().updateMin()  # sets the text's size as the minimum and the size hints
@@ -205,13 +294,13 @@ class ViewPlot(pg.PlotWidget):
     """Shows one :class:`PlotView` at a time; a new view re-uses the curves of the last."""
 
     def __init__(self, parent=None, legend: bool = True):
-        super().__init__(parent, background="w")
+        super().__init__(parent, background="w", axisItems={"bottom": SpacedAxis("bottom")})
         self.setMinimumSize(220, 170)
         item = self.getPlotItem()  # its title, in the same place, replaced by one that never widens it
         item.layout.removeItem(item.titleLabel)
         item.scene().removeItem(item.titleLabel)
         item.titleLabel = _Title("", size="11pt", parent=item)
-        item.layout.addItem(item.titleLabel, 0, 1)
+        item.layout.addItem(item.titleLabel, 0, 0, 1, 3)  # over the axes too: room for more of it
         self._curves: list = []
         self._bars: list = []
         self._legend = item.addLegend(
