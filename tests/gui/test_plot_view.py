@@ -183,7 +183,7 @@ def test_a_title_wider_than_its_plot_shrinks_then_is_shortened_with_its_whole_te
 
 
 def _bottom_labels(plot):
-    """The x axis's tick labels as drawn: (left, right) pixel extents, left to right."""
+    """The x axis's tick labels as drawn, left to right: (left edge, right edge in pixels, text)."""
     from PySide6.QtGui import QImage, QPainter
 
     axis = plot.getPlotItem().getAxis("bottom")
