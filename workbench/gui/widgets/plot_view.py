@@ -125,12 +125,9 @@ class _Title(pg.LabelItem):
     def _fit(self) -> None:
         """Draw the wanted title in the largest font from its own size down to
         :data:`MIN_TITLE_PT` that fits the width it has, else elided at that size."""
-        wanted = getattr(self, "_wanted", None)
-        if wanted is None:
-            return
-        text, args = wanted
+        text, args = self._wanted  # LabelItem's constructor sets the first text
         width = float(self.size().width())
-        if getattr(self, "_fitted", None) == (text, width):
+        if self._fitted == (text, width):
             return
         self._fitted = (text, width)
         size = str(args.get("size", self.opts.get("size", "11pt")))
