@@ -12,11 +12,9 @@ from __future__ import annotations
 
 import asyncio
 import json
-import shutil
 import socket
 import threading
 import time
-from pathlib import Path
 
 import pytest
 
@@ -192,16 +190,12 @@ def test_cancel_while_waiting_for_the_headset_stops_the_wait_and_measures_nothin
 
 # -- a calibration through the real page, in chromium with the emulated headset ----------------------------
 @pytest.fixture(scope="module")
-def browser():
-    sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright (the test extra)")
+def browser(playwright_driver):
     from tests.vr.conftest import CHROMIUM, CHROMIUM_ARGS
 
-    if not Path(CHROMIUM).is_file() and not shutil.which("chromium"):
-        pytest.skip("Debian's chromium is not installed (apt install chromium)")
-    with sync_api.sync_playwright() as driver:
-        chromium = driver.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
-        yield chromium
-        chromium.close()
+    chromium = playwright_driver.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
+    yield chromium
+    chromium.close()
 
 
 def test_a_simulated_calibration_through_the_page_in_an_emulated_headset_records_the_simulated_session(

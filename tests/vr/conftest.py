@@ -39,15 +39,6 @@ def wait_listening(port: int, timeout_s: float = 30.0) -> None:
     raise AssertionError(f"nothing listens on 127.0.0.1:{port} after {timeout_s} s")
 
 
-@pytest.fixture(scope="session")
-def playwright_driver():
-    sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright (the test extra)")
-    if not Path(CHROMIUM).is_file():
-        pytest.skip("Debian's chromium is not installed (apt install chromium)")
-    with sync_api.sync_playwright() as driver:
-        yield driver
-
-
 @pytest.fixture(scope="module")
 def browser(playwright_driver):
     """One headless chromium per test module."""
