@@ -26,3 +26,13 @@ def playwright_driver():
         pytest.skip("Debian's chromium is not installed (apt install chromium)")
     with sync_api.sync_playwright() as driver:
         yield driver
+
+
+@pytest.fixture(scope="module")
+def browser(playwright_driver):
+    """One headless chromium (Debian's, software WebGL 2) per test module."""
+    from tests.vr.conftest import CHROMIUM, CHROMIUM_ARGS
+
+    chromium = playwright_driver.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
+    yield chromium
+    chromium.close()

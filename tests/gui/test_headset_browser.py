@@ -189,15 +189,6 @@ def test_cancel_while_waiting_for_the_headset_stops_the_wait_and_measures_nothin
 
 
 # -- a calibration through the real page, in chromium with the emulated headset ----------------------------
-@pytest.fixture(scope="module")
-def browser(playwright_driver):
-    from tests.vr.conftest import CHROMIUM, CHROMIUM_ARGS
-
-    chromium = playwright_driver.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
-    yield chromium
-    chromium.close()
-
-
 def test_a_simulated_calibration_through_the_page_in_an_emulated_headset_records_the_simulated_session(
         qtbot, window, tmp_path, browser):
     from tests.vr.conftest import PageDriver

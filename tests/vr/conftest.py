@@ -39,14 +39,6 @@ def wait_listening(port: int, timeout_s: float = 30.0) -> None:
     raise AssertionError(f"nothing listens on 127.0.0.1:{port} after {timeout_s} s")
 
 
-@pytest.fixture(scope="module")
-def browser(playwright_driver):
-    """One headless chromium per test module."""
-    chromium = playwright_driver.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
-    yield chromium
-    chromium.close()
-
-
 class PageDriver:
     """A page of the WebXR server in a fresh browser context, with helpers."""
 
