@@ -285,7 +285,47 @@ def test_bench_plans_measures_only_the_plans_named(capsys, monkeypatch):
     assert main(["bench", "plans", "--plans", "adaptive", "--speed-mode", "fast"]) == 0
     assert asked == {"plans": ("adaptive",), "speed_mode": 1}
     assert main(["bench", "plans", "--plans", "adaptive", "fast"]) == 2
-    assert "--plans: unknown 'fast'; use some of paper, paper+greys, adaptive" in capsys.readouterr().err
+    assert ("--plans: unknown 'fast'; use some of paper, paper+greys, adaptive, paper-repeat"
+            in capsys.readouterr().err)
+    assert main(["bench", "plans", "--plans", "paper", "paper-repeat", "adaptive"]) == 0
+    assert asked == {"plans": ("paper", "paper-repeat", "adaptive"), "speed_mode": 0}
+
+
+def test_paper_repeat_is_the_paper_plan_with_another_noise_draw(tmp_path):
+    """The bench's ``paper-repeat`` measures the same patches on the same display as ``paper``; only
+    the instrument's noise differs (its own stream), by about the display's repeatability."""
+    from tests.diagnostics import plans_bench
+
+    kind, effects = plans_bench.scenarios()["clean"]
+    first, again = (plans_bench.measure_plan(plan, "clean", kind, effects, 7, tmp_path / plan)
+                    for plan in ("paper", "paper-repeat"))
+    assert np.array_equal(first[0].rgb, again[0].rgb) and np.array_equal(first[0].kind, again[0].kind)
+    lit = first[0].XYZ[:, 1] > 1.0
+    ratio = again[0].XYZ[lit, 1] / first[0].XYZ[lit, 1]
+    assert not np.allclose(ratio, 1.0, rtol=1e-6, atol=0.0)
+    assert np.std(ratio) < 10 * first[5] + 1e-3  # noise of the order of one reading's, not a new display
+    rgb = np.array([[40, 80, 120], [255, 255, 255]], dtype=float)
+    assert np.allclose(first[1](rgb), again[1](rgb), rtol=1e-3)  # the same true display
+
+
+def test_bench_acceptance_sets_adaptive_beside_the_paper_plans_repeatability():
+    from tests.diagnostics import plans_bench
+
+    def outcome(plan, seed, hidden):
+        return plans_bench.PlanOutcome("clean", "generator", seed, plan, {}, 100.0, 10, hidden, hidden,
+                                       hidden, (), "baseline", 0, 0.0, (0.0, 0.0))
+
+    hidden = {1: (0.05, 0.10, 0.06), 2: (0.10, 0.05, 0.08), 3: (0.05, 0.05, 0.09)}  # paper, repeat, adaptive
+    outcomes = [outcome(plan, seed, value) for seed, values in hidden.items()
+                for plan, value in zip(("paper", "paper-repeat", "adaptive"), values)]
+    line = [t for t in plans_bench.table(outcomes).splitlines()
+            if t.startswith("the paper plan's repeatability")]
+    assert line == ["the paper plan's repeatability (paper-repeat: the same 3 displays and patches, "
+                    "another draw of the instrument's noise): hidden mean ΔE00 0.0667 and 0.0667; "
+                    "the repeat misses the first + 0.02 on 1, the first the repeat's on 1; adaptive "
+                    "misses the first on 1, the repeat on 2"]
+    assert not [t for t in plans_bench.table(outcomes[2::3] + outcomes[::3]).splitlines()
+                if t.startswith("the paper plan's repeatability")]  # no repeat measured: no such line
 
 
 def test_no_fold_holds_every_white():

@@ -200,7 +200,9 @@ def _plans_arguments(parser: argparse.ArgumentParser) -> None:
                         help="only these scenarios (default: clean, every effect form, the pairs, "
                              "the simulated headset)")
     parser.add_argument("--plans", nargs="+", metavar="PLAN",
-                        help="measure only these plans (default: paper, paper+greys, adaptive)")
+                        help="measure only these plans (default: paper, paper+greys, adaptive; "
+                             "paper-repeat: the paper plan again on the same displays, another "
+                             "draw of the instrument's noise, for the reference's repeatability)")
     parser.add_argument("--speed-mode", choices=("normal", "fast"), default="normal",
                         help="the CS-2000's speed mode for every plan (fast: 16 s at most in the dark, "
                              "another dark end; default normal, up to 242 s)")
@@ -220,12 +222,12 @@ def _plans_run(args: argparse.Namespace):
 
         raise InputError(f"--scenarios: unknown {', '.join(map(repr, unknown))}; use some of "
                          f"{', '.join(known)}")
-    unknown_plans = [name for name in args.plans or () if name not in bench.PLANS]
+    unknown_plans = [name for name in args.plans or () if name not in bench.KNOWN_PLANS]
     if unknown_plans:
         from workbench.errors import InputError
 
         raise InputError(f"--plans: unknown {', '.join(map(repr, unknown_plans))}; use some of "
-                         f"{', '.join(bench.PLANS)}")
+                         f"{', '.join(bench.KNOWN_PLANS)}")
     outcomes = bench.run_plans_bench(args.sessions, args.scenarios,
                                      plans=tuple(args.plans) if args.plans else bench.PLANS,
                                      speed_mode=bench.SPEED_MODES[args.speed_mode])
