@@ -60,7 +60,8 @@ import numpy as np
 
 from tests.diagnostics.independent_generator import FORMS, PAIRED_FORMS, generate_session, hidden_colours
 
-__all__ = ["PLANS", "REPEAT_PLANS", "KNOWN_PLANS", "HIDDEN_COLOURS", "TIME_SHARE", "MEAN_MARGIN", "INTERACTION_FORMS",
+__all__ = ["PLANS", "NOISE_STREAM", "REPEAT_PLANS", "KNOWN_PLANS", "HIDDEN_COLOURS", "TIME_SHARE",
+           "MEAN_MARGIN", "INTERACTION_FORMS",
            "INTERACTION_GAIN", "FIRST_SEED", "SPEED_MODES", "DRIFT_MET_SIGMA", "scenarios", "radiance_of_XYZ", "PlanOutcome",
            "measure_plan", "run_plans_bench", "summarize", "table", "markdown", "PlansBenchResult",
            "outcomes_from_json"]
