@@ -90,3 +90,23 @@ def test_a_real_black_level_is_still_named():
             diagnosis = diagnose(generate_session({"black-offset": form}, seed=seed,
                                                   plan="authors-2024").session)
             assert "black-offset" in {f.effect for f in diagnosis.findings}, (form, seed)
+
+
+def test_a_sweep_is_read_between_its_points_along_a_power_law_when_one_value_reads_below_zero():
+    """A red primary's Z near zero reads at or below it once the black is subtracted; the sum of
+    the sweeps at a grey between two points must still follow the luminance's power law (a chord
+    through all three values was 9 % high midway through a 32-DAC gap: a false interaction from
+    the adaptive plan's sparse sweeps beside a wander, seed 42002)."""
+    from workbench.diagnostics.detectors import _sweep_at
+    from workbench.diagnostics.evidence import ChannelSweep
+
+    drive = np.array([32.0, 64.0, 96.0, 128.0]) / 255.0
+    shares = np.array([0.64 / 0.33, 1.0, 0.0])  # a red primary: X/Y, 1, Z/Y
+    XYZ = (drive[:, None] ** 2.4) * 20.0 * shares[None, :]
+    XYZ[1, 2] = -1e-5  # Z at DAC 64 a trace below zero
+    sweep = ChannelSweep(channel=0, drive=drive, XYZ=XYZ, full_XYZ=20.0 * shares)
+    at = _sweep_at(sweep, 80.0 / 255.0)
+    expected = (80.0 / 255.0) ** 2.4 * 20.0
+    assert at[1] == pytest.approx(expected, rel=1e-9)
+    assert at[0] == pytest.approx(expected * shares[0], rel=1e-9)
+    assert abs(at[2]) < 1e-5

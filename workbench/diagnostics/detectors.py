@@ -557,7 +557,8 @@ both sides (the sums are interpolated between them, log-log: exact for a local p
 
 
 def _sweep_at(sweep: ChannelSweep, drive: float) -> np.ndarray | None:
-    """The channel's black-subtracted XYZ at ``drive``, log-log between the neighbouring points."""
+    """The channel's black-subtracted XYZ at ``drive`` between the neighbouring points (Y log-log,
+    X/Y and Z/Y linearly)."""
     d = sweep.drive
     if np.any(np.isclose(d, drive, rtol=0, atol=1e-9)):
         return sweep.XYZ[int(np.argmin(np.abs(d - drive)))]
@@ -568,11 +569,16 @@ def _sweep_at(sweep: ChannelSweep, drive: float) -> np.ndarray | None:
     if 255 * (d[hi] - d[lo]) > 2 * GREY_SUM_MAX_GAP:
         return None
     a, b = sweep.XYZ[lo], sweep.XYZ[hi]
-    if np.any(a <= 0) or np.any(b <= 0):
+    if a[1] <= 0 or b[1] <= 0:
         u = (drive - d[lo]) / (d[hi] - d[lo])
         return a + u * (b - a)
+    # the luminance log-log, each tristimulus value's share of it linearly: a red primary's Z or a
+    # blue one's X near zero may read at or below it after the black is subtracted, and a straight
+    # chord of all three (as the fallback once was) lies up to 9 % above a gamma-2.4 curve midway
+    # through a 32-DAC gap, a false interaction on the sparse sweeps of the adaptive plan
     u = np.log(drive / d[lo]) / np.log(d[hi] / d[lo])
-    return np.exp(np.log(a) + u * (np.log(b) - np.log(a)))
+    Y = float(np.exp(np.log(a[1]) + u * (np.log(b[1]) - np.log(a[1]))))
+    return (a / a[1] + u * (b / b[1] - a / a[1])) * Y
 
 
 def greys_against_sum(context: DiagnosisContext) -> GreysAgainstSum | None:
