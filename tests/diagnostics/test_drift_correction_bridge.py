@@ -99,3 +99,25 @@ def test_a_step_during_a_sweep_no_longer_tilts_the_tone_curve_on_a_grey_ramp_pla
     authors = float(np.mean(delta_E2000(
         fit_grey_ramp_linearisation(generated.session).forward(rgb), truth, diagnosis.white)))
     assert ours < authors - 0.03, (ours, authors)
+
+
+def test_a_primary_read_across_a_step_carries_its_correction_into_the_white_against_the_sum():
+    """On the seed authors' plan the green primary of this bluish black beside a 7 % step was
+    read between the two references the step came between: corrected by the ramp, it is 1 %
+    uncertain, and the white against R+G+B, tested without that, named a channel interaction
+    from its 0.9 % shortfall (χ² 17.3 on 3 dof, z 2.9)."""
+    from workbench.diagnostics.detectors import primary_correction_covariance, white_against_sum
+
+    generated = generate_session({"black-offset": "bluish", "temporal-drift": "step"},
+                                 seed=45007, plan="authors-2024")
+    diagnosis = diagnose(generated.session)
+    context = diagnosis.context
+    green = context.sweeps[1]
+    assert green.correction_sd[-1] > 0.005
+    extra = primary_correction_covariance(green)
+    np.testing.assert_allclose(extra, green.correction_sd[-1] ** 2
+                               * np.outer(green.full_XYZ, green.full_XYZ))
+    *_, covariance, _ = white_against_sum(context)
+    assert covariance[1, 1] >= extra[1, 1]
+    named = [f.effect for f in diagnosis.findings]
+    assert named[:2] == ["temporal-drift", "black-offset"] and "channel-interaction" not in named

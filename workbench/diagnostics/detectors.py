@@ -131,6 +131,7 @@ __all__ = [
     "additivity_p_value",
     "mean_covariance",
     "white_against_sum",
+    "primary_correction_covariance",
 ]
 
 CHANNEL_NAMES = ("red", "green", "blue")
@@ -645,7 +646,8 @@ def white_against_sum(context: DiagnosisContext):
 
     ``W − K − Σ(P − K) = W + 2K − ΣP``: the white's covariance, four times the
     black's and each primary's, each at its own measured XYZ (so a deep blue
-    carries the large X and Z uncertainty its small y gives it).
+    carries the large X and Z uncertainty its small y gives it), and where a drift was
+    corrected each primary's correction uncertainty (:func:`primary_correction_covariance`).
     """
     noise = context.noise
     summed = sum(s.full_XYZ for s in context.sweeps)  # black subtracted
@@ -654,6 +656,7 @@ def white_against_sum(context: DiagnosisContext):
                 (context.black, context.black_count, 4.0)]
     measured += [(s.full_XYZ + context.black, s.full_count, 1.0) for s in context.sweeps]
     covariance = sum(w * mean_covariance(noise, XYZ, n) for XYZ, n, w in measured)
+    covariance = covariance + sum(primary_correction_covariance(s) for s in context.sweeps)
     chromatic = sum(w * _mean_chromaticity_covariance(noise, XYZ, n) for XYZ, n, w in measured)
     drifting = unexplained_gain_variance(context)
     if drifting > 0:  # the primaries were read at other moments than the whites
@@ -661,6 +664,21 @@ def white_against_sum(context: DiagnosisContext):
             np.outer(context.white, context.white) / max(context.white_count, 1)
             + sum(np.outer(s.full_XYZ, s.full_XYZ) for s in context.sweeps))
     return white, summed, covariance, chromatic
+
+
+def primary_correction_covariance(sweep: ChannelSweep) -> np.ndarray:
+    """Covariance the drift correction's own uncertainty adds to a sweep's full-drive primary
+    (zero where no drift was corrected or the primary was read at a reference's moment).
+
+    A primary read between two references across which a step came is corrected by a ramp
+    between them, off by up to half the step: on the seed authors' plan a bluish black beside a
+    7 % step (peer bench seed 45007) read its green primary 0.97 % uncertain that way, and the
+    white against R+G+B, tested without it, named a channel interaction at z 2.9 from a 0.9 %
+    green shortfall. The greys' test carries the same uncertainty on each sweep point."""
+    if sweep.correction_sd is None:
+        return np.zeros((3, 3))
+    u = float(sweep.correction_sd[-1])  # the last level is full drive (channel_sweeps)
+    return u ** 2 * np.outer(sweep.full_XYZ, sweep.full_XYZ)
 
 
 def unexplained_gain_variance(context: DiagnosisContext) -> float:

@@ -27,7 +27,8 @@ import numpy as np
 
 from workbench.diagnostics.detectors import (DiagnosisContext, additivity_p_value,
                                              common_gain_test, drift_form, mean_covariance,
-                                             tone_data, white_against_sum)
+                                             primary_correction_covariance, tone_data,
+                                             white_against_sum)
 from workbench.diagnostics.significance import FAMILY_ALPHA
 from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift, partial_greys, xy_of
 from workbench.display.extended import (
@@ -369,8 +370,9 @@ def white_constrained(context: DiagnosisContext) -> DiagnosisContext | None:
     solved = np.linalg.solve(covariance, white - summed)
     sweeps = []
     for sweep in context.sweeps:
-        full = sweep.full_XYZ + mean_covariance(context.noise, sweep.full_XYZ + context.black,
-                                                sweep.full_count) @ solved
+        own = (mean_covariance(context.noise, sweep.full_XYZ + context.black, sweep.full_count)
+               + primary_correction_covariance(sweep))
+        full = sweep.full_XYZ + own @ solved
         XYZ = sweep.XYZ.copy()
         XYZ[-1] = full  # the sweep's last level is its full drive (channel_sweeps)
         sweeps.append(replace(sweep, XYZ=XYZ, full_XYZ=full))
