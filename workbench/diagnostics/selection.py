@@ -510,9 +510,11 @@ def _grey_ramp_without_drift(context: DiagnosisContext, choice: ModelChoice, ter
     if gain > needed:
         return None
     with_drift, without = group_mean(*corrected), group_mean(*measured)
-    reason = (f"{choice.reason}; fitted on the rows as measured: the drift correction does not "
-              f"lower its cross-validated error ({without:.3f} without it vs {with_drift:.3f} "
-              f"with it, a gain of {gain:.3f} ± {standard_error:.3f})")
+    verdict = ("predicts them worse beyond noise" if timed else
+               "does not lower its cross-validated error")
+    reason = (f"{choice.reason}; fitted on the rows as measured: the drift correction {verdict} "
+              f"({without:.3f} without it vs {with_drift:.3f} with it, a gain of {gain:.3f} ± "
+              f"{standard_error:.3f})")
     scores = {**choice.cv_mean_dE00, name: without}
     return plain, replace(choice, reason=reason, cv_mean_dE00=scores)
 
