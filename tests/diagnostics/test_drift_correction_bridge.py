@@ -121,3 +121,28 @@ def test_a_primary_read_across_a_step_carries_its_correction_into_the_white_agai
     assert covariance[1, 1] >= extra[1, 1]
     named = [f.effect for f in diagnosis.findings]
     assert named[:2] == ["temporal-drift", "black-offset"] and "channel-interaction" not in named
+
+
+def test_a_primary_read_just_after_an_unplaced_step_is_tested_from_either_side_of_it():
+    """On ``paper+greys`` the green primary of this bluish black beside a 4 % step was read 8 s
+    after a reference, just after the step, which the ramp between that reference and the next
+    places later: corrected by the ramp it is 4.2 % off, where the bridge's standard deviation
+    says 0.46 % (a step's error is all or nothing). The white is also tested with each uncertain
+    primary corrected by either reference's gain, and an interaction must show for every one."""
+    from workbench.diagnostics.detectors import (_placements_of_uncertain_primaries,
+                                                 run_detectors)
+
+    generated = generate_session({"black-offset": "bluish", "temporal-drift": "step"},
+                                 seed=46006, plan="paper+greys")
+    diagnosis = diagnose(generated.session)
+    assert "channel-interaction" not in {f.effect for f in diagnosis.findings}
+    assert [f.effect for f in diagnosis.findings][:2] == ["temporal-drift", "black-offset"]
+    interaction = next(r for r in diagnosis.results if r.effect == "channel-interaction")
+    assert interaction.p_value > 0.01
+    # the detectors' context (the drift corrected): two alternatives for each uncertain
+    # primary, every combination but the ramp's own
+    context, _ = run_detectors(generated.session.without("validation"))
+    assert context.drift_found
+    uncertain = sum(s.correction_sd is not None and s.correction_sd[-1] > 0 for s in context.sweeps)
+    assert uncertain >= 1
+    assert len(_placements_of_uncertain_primaries(context)) == 3 ** uncertain - 1

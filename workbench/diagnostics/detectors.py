@@ -493,6 +493,13 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
         return _untestable("channel-interaction", "no white measured beside the primaries")
     white, summed, covariance, chromatic = white_against_sum(context)
     chi2, p = _additivity_test(context.noise, white - summed, covariance, chromatic)
+    placed = _placements_of_uncertain_primaries(context)
+    if placed:
+        # the change between two references came at an unknown moment: an interaction must show
+        # wherever it came, so the white is also tested against each primary corrected as if the
+        # change came before it or after it (a step's error is all or nothing, not Gaussian)
+        p = max([p] + [_additivity_test(context.noise, white - alternative, covariance,
+                                        chromatic)[1] for alternative in placed])
     ratio = white / summed
     statistic = 1.0 - float(ratio[1])
     standard_error = float(np.sqrt(covariance[1, 1]) / summed[1])
@@ -638,6 +645,31 @@ def greys_against_sum(context: DiagnosisContext) -> GreysAgainstSum | None:
     return GreysAgainstSum(count=n, chi2=chi2, dof=dof, p_value=float(p),
                            ratio=float(np.mean(ratios)), low=float(ratios.min()),
                            high=float(ratios.max()))
+
+
+def _placements_of_uncertain_primaries(context: DiagnosisContext) -> list[np.ndarray]:
+    """R+G+B with each primary read between two references that disagree corrected by the one
+    reference's gain or the other's instead of the ramp between them (every combination but the
+    ramp's); empty where no primary's correction is uncertain."""
+    drift = context.drift
+    if not context.drift_found or drift is None:
+        return []
+    curve = drift.gains if drift.smoothed is None else drift.smoothed
+    options = []
+    for sweep in context.sweeps:
+        t = None if sweep.times is None else float(sweep.times[-1])
+        if sweep.correction_sd is None or t is None or not sweep.correction_sd[-1] > 0:
+            options.append([sweep.full_XYZ])
+            continue
+        k = int(np.clip(np.searchsorted(drift.times, t) - 1, 0, drift.times.size - 2))
+        g = float(drift.gain(t))
+        options.append([sweep.full_XYZ] + [sweep.full_XYZ * g / float(side)
+                                           for side in (curve[k], curve[k + 1])])
+    if all(len(o) == 1 for o in options):
+        return []
+    from itertools import product
+
+    return [sum(choice) for choice in product(*options)][1:]
 
 
 def white_against_sum(context: DiagnosisContext):
