@@ -80,6 +80,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field, replace
+from itertools import product
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -494,12 +495,15 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
     white, summed, covariance, chromatic = white_against_sum(context)
     chi2, p = _additivity_test(context.noise, white - summed, covariance, chromatic)
     placed = _placements_of_uncertain_primaries(context)
+    ramp_p = p
     if placed:
         # the change between two references came at an unknown moment: an interaction must show
         # wherever it came, so the white is also tested against each primary corrected as if the
         # change came before it or after it (a step's error is all or nothing, not Gaussian)
         p = max([p] + [_additivity_test(context.noise, white - alternative, covariance,
                                         chromatic)[1] for alternative in placed])
+    placement = (f", p {p:.2g} at the least favourable moment of the drift's change for the "
+                 "primaries read between two references that disagree" if p > ramp_p else "")
     ratio = white / summed
     statistic = 1.0 - float(ratio[1])
     standard_error = float(np.sqrt(covariance[1, 1]) / summed[1])
@@ -507,8 +511,8 @@ def detect_channel_interaction(context: DiagnosisContext) -> DetectorResult:
     common = common_gain_test(context)
     evidence = (f"white measures {100 * ratio[1]:.1f} % of R+G+B in luminance "
                 f"(X {100 * ratio[0]:.1f} %, Z {100 * ratio[2]:.1f} %, black subtracted; "
-                f"± {100 * standard_error:.2f} %, χ² {chi2:.1f} on 3 dof): the full-drive "
-                f"mixture {direction} the sum of its primaries; "
+                f"± {100 * standard_error:.2f} %, χ² {chi2:.1f} on 3 dof{placement}): the "
+                f"full-drive mixture {direction} the sum of its primaries; "
                 + ("channel by channel (one gain common to every channel leaves χ² "
                    f"{common.chi2:.1f} on 2 dof, p {common.p_value:.2g}; the channels' own "
                    f"shortfalls {', '.join(f'{100 * a:.1f}' for a in common.amounts)} % against "
@@ -667,8 +671,6 @@ def _placements_of_uncertain_primaries(context: DiagnosisContext) -> list[np.nda
                                            for side in (curve[k], curve[k + 1])])
     if all(len(o) == 1 for o in options):
         return []
-    from itertools import product
-
     return [sum(choice) for choice in product(*options)][1:]
 
 
