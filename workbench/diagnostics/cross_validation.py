@@ -47,7 +47,7 @@ from workbench.display import GammaMatrixDisplay
 from workbench.errors import InputError
 
 __all__ = ["FOLDS", "MIN_FREE_LEVELS", "CV_Z", "NOISE_TESTED_TERMS", "TIMED_DRIFT_Z",
-           "TIMED_DRIFT_MIN_Z", "fold_of_rows", "cross_validated_errors",
+           "TIMED_DRIFT_MIN_Z", "is_timed_drift", "fold_of_rows", "cross_validated_errors",
            "cross_validated_errors_of", "cross_validated_dE00", "group_mean", "paired_gain",
            "select_terms"]
 
@@ -242,6 +242,12 @@ def _group_of_rows(rgb: np.ndarray) -> np.ndarray:
     return np.select([lit == 1, white, grey], [0, 2, 1], default=3)
 
 
+def is_timed_drift(context: DiagnosisContext, drift_z: float | None) -> bool:
+    """Whether a drift was found on measurement times at z ≥ :data:`TIMED_DRIFT_MIN_Z` (its
+    correction to the settled state is then kept unless it predicts worse beyond noise)."""
+    return context.time_basis == "time" and drift_z is not None and drift_z >= TIMED_DRIFT_MIN_Z
+
+
 def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_forms=None,
                  drift_z: float | None = None) -> tuple[list, dict]:
     """The terms of ``found`` that improve the cross-validated prediction (module doc).
@@ -270,8 +276,7 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
     order = sorted(found, key=lambda e: (impacts or {}).get(e, 0.0))
     # a drift found on measurement times far beyond noise: its correction to the settled state
     # is kept unless it predicts worse beyond noise (TIMED_DRIFT_Z)
-    timed_drift = (context.time_basis == "time" and drift_z is not None
-                   and drift_z >= TIMED_DRIFT_MIN_Z)
+    timed_drift = is_timed_drift(context, drift_z)
     for effect in order:
         trial = [e for e in current if e != effect]
         trial_errors = cross_validated_errors(context, trial, baseline, tone_forms)

@@ -658,17 +658,15 @@ def _placements_of_uncertain_primaries(context: DiagnosisContext) -> list[np.nda
     drift = context.drift
     if not context.drift_found or drift is None:
         return []
-    curve = drift.gains if drift.smoothed is None else drift.smoothed
     options = []
     for sweep in context.sweeps:
         t = None if sweep.times is None else float(sweep.times[-1])
         if sweep.correction_sd is None or t is None or not sweep.correction_sd[-1] > 0:
             options.append([sweep.full_XYZ])
             continue
-        k = int(np.clip(np.searchsorted(drift.times, t) - 1, 0, drift.times.size - 2))
         g = float(drift.gain(t))
-        options.append([sweep.full_XYZ] + [sweep.full_XYZ * g / float(side)
-                                           for side in (curve[k], curve[k + 1])])
+        options.append([sweep.full_XYZ] + [sweep.full_XYZ * g / side
+                                           for side in drift.gains_around(t)])
     if all(len(o) == 1 for o in options):
         return []
     return [sum(choice) for choice in product(*options)][1:]

@@ -80,6 +80,12 @@ class DriftCorrection:
         out[inside] = (change * np.sqrt(u * (1.0 - u)))[inside]
         return out
 
+    def gains_around(self, t_s: float) -> tuple[float, float]:
+        """The correction's gains at the two references around ``t_s`` (the ramp's ends there)."""
+        k, _, _ = self._interval(np.atleast_1d(np.asarray(t_s, dtype=float)))
+        curve = self.gains if self.smoothed is None else self.smoothed
+        return float(curve[k[0]]), float(curve[k[0] + 1])
+
     def _interval(self, t: np.ndarray) -> tuple:
         """Each time's interval between references ``k``, its fraction ``u`` of it, and whether it
         lies between the first and the last reference (``inside``; ``u`` is 0 elsewhere)."""

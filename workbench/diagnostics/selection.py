@@ -53,11 +53,11 @@ from workbench.diagnostics.detectors import (
     family_size,
 )
 from workbench.diagnostics.cross_validation import (
-    TIMED_DRIFT_MIN_Z,
     TIMED_DRIFT_Z,
     cross_validated_errors,
     cross_validated_errors_of,
     group_mean,
+    is_timed_drift,
     paired_gain,
     select_terms,
 )
@@ -408,9 +408,10 @@ def diagnose(session: Session) -> Diagnosis:
     if "temporal-drift" not in found and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
                                 load_session=load_session)
+    drift_z = next((r.z for r in results if r.effect == "temporal-drift"), None)
     terms, cross_validation = select_terms(
         context, found, baseline, {r.effect: r.impact_dE00 for r in results}, tone_forms,
-        drift_z=next((r.z for r in results if r.effect == "temporal-drift"), None))
+        drift_z=drift_z)
     if terms and "temporal-drift" not in terms and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
                                 load_session=load_session)
@@ -428,7 +429,6 @@ def diagnose(session: Session) -> Diagnosis:
             f"{additivity_p_value(context):.2f}), so each moves by its share of the white's "
             "departure"))
     by_effect = dict(cross_validation["by_effect"])
-    drift_z = next((r.z for r in results if r.effect == "temporal-drift"), None)
     plain = _grey_ramp_without_drift(context, choice, terms, extended is not baseline, found,
                                      fit_session, load_session, drift_z)
     if plain is not None:
@@ -481,7 +481,7 @@ def _grey_ramp_without_drift(context: DiagnosisContext, choice: ModelChoice, ter
     chosen over the extension must be served by the correction too. The drift stays where it
     lowers the candidate's cross-validated error on the fit rows as measured (both versions
     predict the same rows in the same folds, the corrected one times its drift gain), or, for a
-    drift found on measurement times at z ≥ :data:`TIMED_DRIFT_MIN_Z`, where the uncorrected
+    drift found on measurement times at z ≥ 4 (:func:`is_timed_drift`), where the uncorrected
     candidate does not predict them better beyond noise (the settled state, as in term
     selection). A real HP EliteBook chart (four whites, 94–103 %, drift tested on row order at
     z 2.6) exported the grey ramp from corrected rows at 2.75 mean ΔE00 on its held-out
@@ -505,7 +505,7 @@ def _grey_ramp_without_drift(context: DiagnosisContext, choice: ModelChoice, ter
     if corrected is None or measured is None:
         return None
     gain, standard_error = paired_gain(measured, corrected)  # what the correction buys
-    timed = context.time_basis == "time" and drift_z is not None and drift_z >= TIMED_DRIFT_MIN_Z
+    timed = is_timed_drift(context, drift_z)
     needed = -TIMED_DRIFT_Z * standard_error if timed else 0.0
     if gain > needed:
         return None
