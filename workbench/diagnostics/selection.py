@@ -427,7 +427,8 @@ def diagnose(session: Session) -> Diagnosis:
             f"estimated with the {context.white_count} white references as well: the white less "
             f"the black is their sum within noise (additivity test p "
             f"{additivity_p_value(context):.2f}), so each moves by its share of the white's "
-            "departure"))
+            "departure" + (", by a gain alone beside flexible tone curves"
+                           if "tone-curve-shape" in terms else "")))
     by_effect = dict(cross_validation["by_effect"])
     plain = _grey_ramp_without_drift(context, choice, terms, extended is not baseline, found,
                                      fit_session, load_session, drift_z)
