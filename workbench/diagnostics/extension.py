@@ -463,8 +463,11 @@ def fit_extended(context: DiagnosisContext, effects, baseline=None, tone_forms=N
       better, 3 worse). Peer bench: seeds 45000–45009 16 sessions moved, mean 0.14864 →
       0.14854; seeds 46000–46009 20 moved, mean 0.15313 → 0.15286, and the one session behind
       the seed authors' method (a soft shoulder on ``paper+greys``, seed 46003, its green
-      primary read 0.9 % bright: 0.153 against 0.138) 0.114. Real charts: a ThinkPad X61
-      0.484 → 0.430 on its 286 held-out colours (the whole step: 0.421), nothing else moved.
+      primary read 0.9 % bright: 0.153 against 0.138) 0.114. ``bench plans``, the adaptive
+      plan on seeds 41001–41004 (100 displays): 8 tone-curve sessions moved, 7 better (toes
+      0.106 → 0.080 and 0.084 → 0.060), one worse by 0.001; mean 0.0774 → 0.0767. Real charts:
+      a ThinkPad X61 0.484 → 0.430 on its 286 held-out colours (the whole step: 0.421),
+      nothing else moved.
     - Skipped beside a drift correction (the additivity test carries none of its error), the
       peer bench's seeds 45000–45009 kept 7 of their 10 gains and lost the warm-ups' (mean
       0.1071); the diagnosis suite's drift sessions gained with it (54 better, 17 worse).
