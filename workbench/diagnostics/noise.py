@@ -31,8 +31,8 @@ model may be fitted on:
   one after another, which a display that drifts or wanders over minutes
   does not inflate (the whole scatter is reported beside it); ``s`` from the
   residuals of x and y of the same bright points (the floor's share of them
-  taken out); ``b`` from the dark points (Y < 2 % of white) and repeated
-  blacks. This is why the drift test can use it: it does not come
+  taken out); ``b`` from the dark points (Y < 2 % of white; :func:`floor_from_dark`) and
+  repeated blacks. This is why the drift test can use it: it does not come
   from the references under test.
 - **Repeated patches.** Rows with the same DAC values (under the same frame:
   window and surround) measured more than once
@@ -72,6 +72,7 @@ __all__ = [
     "NoiseModel",
     "estimate_noise",
     "copy_rows",
+    "floor_from_dark",
     "DEFAULT_GAIN_SD",
     "INSTRUMENT_XY_SD",
     "xy_to_XYZ_jacobian",
@@ -372,6 +373,35 @@ def _loo_operator(drive: np.ndarray, half_window: int = 3):
     return np.asarray(rows).reshape(-1, n), np.asarray(index, dtype=int)
 
 
+def floor_from_dark(squares: np.ndarray, relative: np.ndarray, start: float) -> float:
+    """The floor's variance ``b²`` from the dark points' squared residuals (each normalized to
+    one measurement's variance, ``a² Y² + b²`` expected) and their relative part ``a² Y²``.
+
+    Each square is winsorized at 16× the median-based scale of the squares in units of its own
+    expected variance (4σ, as :func:`_robust_variance`), and ``b²`` is the excess over the
+    relative part averaged with weights ``1 / (a² Y² + b²)²`` (each point by what it says of
+    ``b``: the darkest most), iterated to a fixed point from ``start``. The relative part cannot be taken
+    out before winsorizing: where it dominates the dark points (a panel whose darkest sweep
+    levels are still a few % of white at a 0.4 % gain noise), the differences have a negative
+    median, every one was capped below zero, and the floor fell to its clamp, a tenth of the
+    instrument default: on the independent generator (floor 0.0035, white 177) it read 0.0003,
+    the dark ends of the sweeps weighed a hundred times too much, and a blue sweep whose DAC 5
+    read 0.013 above its true value (4σ of the real floor) was "not a power law".
+    """
+    floor = max(float(start), 0.0)
+    for _ in range(20):
+        expected = relative + floor
+        units = squares / np.where(expected > 0, expected, 1.0)
+        cap = 16.0 * float(np.median(units)) / _CHI2_1_MEDIAN
+        weights = 1.0 / np.where(expected > 0, expected, 1.0) ** 2
+        excess = np.minimum(units, cap) * expected - relative
+        updated = max(float(np.sum(weights * excess) / np.sum(weights)), 0.0)
+        if abs(updated - floor) <= 1e-6 * max(floor, 1e-300):
+            return updated
+        floor = updated
+    return floor
+
+
 def _robust_variance(squares: np.ndarray) -> float:
     """Mean of the squares winsorized at 16× their median-based scale (4σ).
 
@@ -507,7 +537,12 @@ def estimate_noise(session: Session) -> NoiseModel:
     floor_var = (DEFAULT_FLOOR_FRACTION * white_Y) ** 2
     if len(dark) >= _MIN_POINTS:
         Y_dark, squares = (np.asarray(v) for v in zip(*dark))
-        floor_var = max(_robust_variance(squares - relative * Y_dark ** 2), floor_var * 0.01)
+        # the excess of the squares over the relative part, winsorized as differences (it reads
+        # too low where the relative part dominates), or per point in units of its own
+        # variance (floor_from_dark), whichever is larger: neither lets the dark end weigh more
+        excess = _robust_variance(squares - relative * Y_dark ** 2)
+        floor_var = max(excess, floor_from_dark(squares, relative * Y_dark ** 2, floor_var),
+                        floor_var * 0.01)
     blacks = session.XYZ[np.all(session.rgb <= 0, axis=1) & ~copies, 1]
     if blacks.size >= 2:  # repeated blacks measure the floor directly
         floor_var = max(floor_var, float(np.var(blacks, ddof=1)))
