@@ -380,10 +380,10 @@ def floor_from_dark(squares: np.ndarray, relative: np.ndarray, start: float) -> 
     Each square is winsorized at 16× the median-based scale of the squares in units of its own
     expected variance (4σ, as :func:`_robust_variance`), and ``b²`` is the excess over the
     relative part averaged with weights ``1 / (a² Y² + b²)²`` (each point by what it says of
-    ``b``: the darkest most), iterated to a fixed point from ``start``. The relative part cannot be taken
-    out before winsorizing: where it dominates the dark points (a panel whose darkest sweep
-    levels are still a few % of white at a 0.4 % gain noise), the differences have a negative
-    median, every one was capped below zero, and the floor fell to its clamp, a tenth of the
+    ``b``: the darkest most), iterated to a fixed point from ``start``. The relative part
+    cannot be taken out before winsorizing: where it dominates the dark points (a panel whose
+    darkest sweep levels are still a few % of white at a 0.4 % gain noise), the differences
+    have a negative median, every one was capped below zero, and the floor fell to its clamp, a tenth of the
     instrument default: on the independent generator (floor 0.0035, white 177) it read 0.0003,
     the dark ends of the sweeps weighed a hundred times too much, and a blue sweep whose DAC 5
     read 0.013 above its true value (4σ of the real floor) was "not a power law".
@@ -537,9 +537,10 @@ def estimate_noise(session: Session) -> NoiseModel:
     floor_var = (DEFAULT_FLOOR_FRACTION * white_Y) ** 2
     if len(dark) >= _MIN_POINTS:
         Y_dark, squares = (np.asarray(v) for v in zip(*dark))
-        # the excess of the squares over the relative part, winsorized as differences (it reads
-        # too low where the relative part dominates), or per point in units of its own
-        # variance (floor_from_dark), whichever is larger: neither lets the dark end weigh more
+        # the larger of the excess winsorized as differences (too low where the relative part
+        # dominates) and floor_from_dark's: alone, the weighted estimate read a lower floor on a
+        # real chart (a GPD Win, black-point compensated), a chromaticity term passed its test
+        # at z 2.55 against 2.33, and its 286 held-out colours went 0.296 → 0.378 mean ΔE00
         excess = _robust_variance(squares - relative * Y_dark ** 2)
         floor_var = max(excess, floor_from_dark(squares, relative * Y_dark ** 2, floor_var),
                         floor_var * 0.01)
