@@ -383,10 +383,11 @@ def floor_from_dark(squares: np.ndarray, relative: np.ndarray, start: float) -> 
     ``b``: the darkest most), iterated to a fixed point from ``start``. The relative part
     cannot be taken out before winsorizing: where it dominates the dark points (a panel whose
     darkest sweep levels are still a few % of white at a 0.4 % gain noise), the differences
-    have a negative median, every one was capped below zero, and the floor fell to its clamp, a tenth of the
-    instrument default: on the independent generator (floor 0.0035, white 177) it read 0.0003,
-    the dark ends of the sweeps weighed a hundred times too much, and a blue sweep whose DAC 5
-    read 0.013 above its true value (4σ of the real floor) was "not a power law".
+    have a negative median, every one was capped below zero, and the floor fell to its clamp,
+    a tenth of the instrument default: on the independent generator (floor 0.0035, white 177)
+    it read 0.0003, the dark ends of the sweeps weighed a hundred times too much, and a blue
+    sweep whose DAC 5 read 0.013 above its true value (4σ of the real floor) was "not a power
+    law".
     """
     floor = max(float(start), 0.0)
     for _ in range(20):
