@@ -12,8 +12,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.diagnostics import plans_bench
 from tests.diagnostics.independent_generator import generate_session
+from tests.diagnostics.peer_bench import scenarios
 from workbench.diagnostics import diagnose
+from workbench.diagnostics.detectors import curve_variance
 from workbench.diagnostics.evidence import DriftCorrection
 
 
@@ -146,3 +149,43 @@ def test_a_primary_read_just_after_an_unplaced_step_is_tested_from_either_side_o
     uncertain = sum(s.correction_sd is not None and s.correction_sd[-1] > 0 for s in context.sweeps)
     assert uncertain >= 1
     assert len(_placements_of_uncertain_primaries(context)) == 3 ** uncertain - 1
+
+
+def test_the_smoothed_curve_carries_its_references_noise():
+    # twelve references about a warm-up at 0.4 % noise: the smoothed curve, read against the
+    # settled state it is divided by, is off the truth by about its own linearised SD, at the
+    # references and between them. Cp's choice of smoothing adds a variance of its own that the
+    # linearisation leaves out (the RMS error is 1.77 SD over 300 draws), but without the curve's
+    # noise (0) or with each reference's whole noise (the curve's RMS error is 0.76 of it) the
+    # ratio falls outside these bounds
+    times = np.linspace(0.0, 2800.0, 12)
+    truth = 1.0 - 0.04 * np.exp(-times / 600.0)
+    sd = 0.004
+    t = np.union1d(times, 0.5 * (times[1:] + times[:-1]))
+    z = []
+    for seed in range(300):
+        gains = truth * (1.0 + sd * np.random.default_rng(seed).standard_normal(times.size))
+        curve = DriftCorrection(times, gains, gains).smoothed_to_noise(np.full(times.size, sd))
+        assert np.all(curve.curve_sd(t) > 0) and np.all(curve.curve_sd(t) < 1.5 * sd)
+        z.append((curve.gain(t) - np.interp(t, times, truth) / truth[-1]) / curve.curve_sd(t))
+    assert 1.2 < np.sqrt(np.mean(np.square(z))) < 2.5
+    # a correction not smoothed to a known noise knows nothing of it
+    raw = DriftCorrection(times, truth, truth)
+    assert np.all(raw.curve_sd(t) == 0.0)
+
+
+def test_a_primary_corrected_by_a_low_reference_names_no_interaction(tmp_path):
+    # through the CS-2000 protocol, the authors' plan beside a warm-up at 0.46 % noise (peer seed
+    # 62003): the white read 817 s into the session sits 1.7 % below the display (3.6 σ), the
+    # smoothed curve follows it part way, and the red primary read 3 s later is corrected 1.2 %
+    # too far. With only the moment of change as its uncertainty (0.07 %) the white against
+    # R+G+B named a channel interaction (χ² 16.3 on 3 dof); with the curve's own noise (0.37 %)
+    # it names the drift alone
+    session, *_ = plans_bench.measure_plan("authors-2024", "warm-up beside sweeps", "generator",
+                                           scenarios()["warm-up beside sweeps"], 62003,
+                                           tmp_path / "session")
+    diagnosis = diagnose(session)
+    assert [f.effect for f in diagnosis.findings] == ["temporal-drift"], diagnosis.findings
+    red = diagnosis.context.sweeps[0]
+    assert red.correction_sd[-1] < 0.001  # the moment of change: the references agree there
+    assert np.sqrt(curve_variance(diagnosis.context, red.times[-1:], 1)[0]) > 0.003

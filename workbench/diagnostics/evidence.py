@@ -19,6 +19,7 @@ from workbench.session import Session
 
 __all__ = ["DriftCorrection", "ChannelSweep", "STEP_EDF", "TIME_BASES", "drift_references",
            "channel_sweeps", "fit_chromaticity_drift", "partial_greys", "settled_reference",
+           "settled_weights",
            "white_reference_axes", "xy_of",
            "MIN_CHROMATICITY_OUTPUT"]
 
@@ -48,13 +49,15 @@ class DriftCorrection:
     measurement order). ``gains`` are the references as measured (the drift
     test reads them); ``smoothed``, where set (:meth:`smoothed_to_noise`),
     is the curve ``g`` interpolates, so a reference's own noise is not
-    copied into every row measured near it.
+    copied into every row measured near it; ``smoothed_covariance`` is that
+    curve's covariance at the references from their noise (:meth:`curve_sd`).
     """
 
     times: np.ndarray
     gains: np.ndarray
     luminances: np.ndarray
     smoothed: np.ndarray | None = None
+    smoothed_covariance: np.ndarray | None = None
 
     def gain(self, t_s) -> np.ndarray:
         curve = self.gains if self.smoothed is None else self.smoothed
@@ -79,6 +82,27 @@ class DriftCorrection:
         change = self._change(self.gains if self.smoothed is None else self.smoothed, k)
         out[inside] = (change * np.sqrt(u * (1.0 - u)))[inside]
         return out
+
+    def curve_sd(self, t_s) -> np.ndarray:
+        """Relative SD of ``g(t)`` from the references' own noise: the smoothed curve, read
+        against the settled state it is divided by (``smoothed_covariance``), interpolated as
+        the curve is and held flat beyond the references; zero where the curve was not smoothed
+        to a known noise.
+
+        The linearisation holds the smoothing Cp chose fixed; that choice varies with the noise
+        too, and about a warm-up at 0.4 % noise the curve's RMS error is 1.77 times this SD. The
+        additivity tests carry it (:func:`~workbench.diagnostics.detectors.curve_variance`);
+        :meth:`uncertainty`, which the fit and the tone test read, is the moment's alone."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        C = self.smoothed_covariance
+        if C is None or self.times.size < 2:
+            return np.zeros(t.shape)
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+        width = self.times[k + 1] - self.times[k]
+        u = np.clip((t - self.times[k]) / np.where(width > 0, width, 1.0), 0.0, 1.0)
+        var = ((1 - u) ** 2 * C[k, k] + u ** 2 * C[k + 1, k + 1]
+               + 2 * u * (1 - u) * C[k, k + 1])
+        return np.sqrt(np.maximum(var, 0.0))
 
     def gains_around(self, t_s: float) -> tuple[float, float]:
         """The correction's gains at the two references around ``t_s`` (the ramp's ends there)."""
@@ -164,6 +188,11 @@ class DriftCorrection:
         drift sessions moved by more than 0.005, 9 of them for the worse,
         warm-ups most (0.037 → 0.078, 0.022 → 0.080), and one warm-up got a false
         interaction.
+
+        The chosen curve ``c = H g`` is linear in the references ``g`` (``H`` its hat matrix),
+        and so is the settled state ``s = wᵀg`` (:func:`settled_weights`): ``c / s`` moves by
+        ``(H − (c / s) wᵀ) / s`` per reference, and its covariance from the references' noise
+        is ``smoothed_covariance`` (:meth:`curve_sd`).
         """
         sd = np.broadcast_to(np.asarray(relative_sd, dtype=float), self.gains.shape)
         n = self.gains.size
@@ -174,7 +203,7 @@ class DriftCorrection:
         def cp(curve, edf):
             return float(np.sum(((curve - self.gains) / sd) ** 2) + 2.0 * edf)
 
-        best, best_cp = self.gains, cp(self.gains, n)
+        best, best_cp, best_hat = self.gains, cp(self.gains, n), np.eye(n)
         second = np.diff(np.eye(n), 2, axis=0)
         penalty = second.T @ second
         for strength in np.logspace(-6, 4, 41):
@@ -182,15 +211,20 @@ class DriftCorrection:
             curve = hat @ self.gains
             score = cp(curve, np.trace(hat))
             if score < best_cp:
-                best, best_cp = curve, score
+                best, best_cp, best_hat = curve, score, hat
         if n >= 4:
-            step = _best_step(self.gains, sd)
+            step, step_hat = _best_step(self.gains, sd)
             if cp(step, STEP_EDF) < best_cp:
-                best = step
+                best, best_hat = step, step_hat
         # the reference state from every reference of the settled end, not the last two's noise
-        reference = settled_reference(self.times, self.gains, sd)
+        state = settled_weights(self.times, self.gains, sd)
+        reference = float(state @ self.gains)
+        # the curve over the state, linearised in the references: its covariance from their noise
+        lever = (best_hat - np.outer(best / reference, state)) / reference
+        covariance = (lever * sd ** 2) @ lever.T
         return DriftCorrection(times=self.times, gains=self.gains / reference,
-                               luminances=self.luminances, smoothed=best / reference)
+                               luminances=self.luminances, smoothed=best / reference,
+                               smoothed_covariance=covariance)
 
     def correct(self, session: Session) -> Session:
         """The session with every measurement divided by ``g(t)``."""
@@ -252,8 +286,14 @@ def settled_reference(times: np.ndarray, gains: np.ndarray, sd: np.ndarray) -> f
     sessions changed by more than 0.01 (0.037 → 0.046, the authors' 0.078; 0.076 → 0.065),
     and the diagnosis suite's 940 sessions were unchanged outcome for outcome.
     """
+    return float(settled_weights(times, gains, sd) @ gains)
+
+
+def settled_weights(times: np.ndarray, gains: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """The weights (summing to 1) by which :func:`settled_reference` averages ``gains``."""
     times = np.asarray(times, dtype=float)
-    reference = float(gains[-2:].mean())
+    weights = np.zeros(gains.size)
+    weights[-2:] = 0.5
     w2 = 1.0 / sd[-2:] ** 2
     best = 1.0 / float(np.sum(w2))  # the last two's error variance (the state they define)
     for k in range(3, gains.size + 1):
@@ -272,14 +312,16 @@ def settled_reference(times: np.ndarray, gains: np.ndarray, sd: np.ndarray) -> f
         lever = float(times[-2:].mean() - t_mean)
         error = max((slope * lever) ** 2 - lever ** 2 / spread, 0.0) + 1.0 / float(np.sum(w))
         if error < best:
-            reference, best = mean, error
-    return reference
+            best = error
+            weights = np.zeros(gains.size)
+            weights[-k:] = w / np.sum(w)
+    return weights
 
 
 def _best_step(gains: np.ndarray, sd: np.ndarray) -> np.ndarray:
     """The one-step curve (two levels, weighted means) of least χ² through ``gains``."""
     weight = 1.0 / sd ** 2
-    best, best_chi2 = gains, np.inf
+    best, best_chi2, best_hat = gains, np.inf, np.eye(gains.size)
     for k in range(1, gains.size):
         before = np.sum(weight[:k] * gains[:k]) / np.sum(weight[:k])
         after = np.sum(weight[k:] * gains[k:]) / np.sum(weight[k:])
@@ -287,7 +329,10 @@ def _best_step(gains: np.ndarray, sd: np.ndarray) -> np.ndarray:
         chi2 = float(np.sum(((curve - gains) / sd) ** 2))
         if chi2 < best_chi2:
             best, best_chi2 = curve, chi2
-    return best
+            best_hat = np.zeros((gains.size, gains.size))
+            best_hat[:k, :k] = weight[:k] / np.sum(weight[:k])
+            best_hat[k:, k:] = weight[k:] / np.sum(weight[k:])
+    return best, best_hat
 
 
 TIME_BASES = ("time", "row order")
