@@ -97,9 +97,8 @@ class DriftCorrection:
         C = self.smoothed_covariance
         if C is None or self.times.size < 2:
             return np.zeros(t.shape)
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
-        width = self.times[k + 1] - self.times[k]
-        u = np.clip((t - self.times[k]) / np.where(width > 0, width, 1.0), 0.0, 1.0)
+        k, u, _ = self._interval(t)
+        u = np.where(t >= self.times[-1], 1.0, u)  # held flat at the last reference's
         var = ((1 - u) ** 2 * C[k, k] + u ** 2 * C[k + 1, k + 1]
                + 2 * u * (1 - u) * C[k, k + 1])
         return np.sqrt(np.maximum(var, 0.0))
@@ -318,8 +317,9 @@ def settled_weights(times: np.ndarray, gains: np.ndarray, sd: np.ndarray) -> np.
     return weights
 
 
-def _best_step(gains: np.ndarray, sd: np.ndarray) -> np.ndarray:
-    """The one-step curve (two levels, weighted means) of least χ² through ``gains``."""
+def _best_step(gains: np.ndarray, sd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The one-step curve (two levels, weighted means) of least χ² through ``gains``, and its hat
+    matrix (the curve is ``hat @ gains``)."""
     weight = 1.0 / sd ** 2
     best, best_chi2, best_hat = gains, np.inf, np.eye(gains.size)
     for k in range(1, gains.size):
