@@ -87,6 +87,36 @@ def test_a_white_that_is_not_the_sum_or_an_interaction_term_moves_nothing():
         fit_extended(clean_context, ("channel-interaction",)).forward(RGB))
 
 
+@pytest.mark.parametrize("effects, seed", [
+    ({"temporal-drift": "decline"}, 0),  # corrected: the drift curve's noise at each primary
+    (None, 2),  # clean, its whites scattering beyond noise: the change no correction took out
+])
+def test_each_primary_takes_the_share_of_the_departure_the_test_gave_it(effects, seed):
+    """The step is ``P_c + C_c V⁻¹ d`` with ``V`` the additivity test's covariance: each primary's
+    ``C_c`` must be its own part of ``V``, what the drift adds to it included, so the departure
+    the primaries leave is the white's and the black's share of it alone."""
+    from workbench.diagnostics.detectors import (curve_variance, mean_covariance,
+                                                 unexplained_gain_variance, white_against_sum)
+
+    _, context = _context(effects, seed=seed)
+    assert constrained_by_whites(context, ())
+    drifting = unexplained_gain_variance(context)
+    if context.drift_found:
+        assert all(curve_variance(context, s.times[-1:], 1)[0] > 1e-6 for s in context.sweeps)
+    else:
+        assert drifting > 1e-6
+    white, summed, covariance, _ = white_against_sum(context)
+    moved = white_constrained(context)
+    left = white - sum(s.full_XYZ for s in moved.sweeps)
+    noise = context.noise
+    others = (mean_covariance(noise, context.white, context.white_count)
+              + 4 * mean_covariance(noise, context.black, context.black_count)
+              + drifting * np.outer(context.white, context.white) / context.white_count)
+    expected = others @ np.linalg.solve(covariance, white - summed)
+    np.testing.assert_allclose(left, expected, rtol=1e-9, atol=1e-12 * np.abs(white).max())
+    assert np.abs(white - summed).max() > 3 * np.abs(expected).max()  # the step did its work
+
+
 def test_beside_flexible_tone_curves_each_primary_moves_by_a_gain_alone():
     """A flexible tone curve is a table through its sweep relative to the full-drive point: the
     primaries move along themselves (their chromaticity as read), and the exported model is

@@ -27,7 +27,7 @@ import numpy as np
 
 from workbench.diagnostics.detectors import (DiagnosisContext, additivity_p_value,
                                              common_gain_test, drift_form, mean_covariance,
-                                             primary_correction_covariance, tone_data,
+                                             primary_drift_covariance, tone_data,
                                              white_against_sum)
 from workbench.diagnostics.significance import FAMILY_ALPHA
 from workbench.diagnostics.evidence import ChannelSweep, fit_chromaticity_drift, partial_greys, xy_of
@@ -352,7 +352,9 @@ def white_constrained(context: DiagnosisContext, gain_only: bool = False
     or two on a chart) say what a primary's few readings alone cannot: the generalized least-squares estimate moves each
     primary by its own covariance times the inverse covariance of the white's departure from
     R+G+B times that departure, ``P_c + C_c V⁻¹ (W − K − Σ P)`` (``V`` as the additivity test
-    reads it, :func:`~workbench.diagnostics.detectors.white_against_sum`, drift included). The
+    reads it, :func:`~workbench.diagnostics.detectors.white_against_sum`, drift included, and
+    ``C_c`` the primary's own part of it, drift included:
+    :func:`~workbench.diagnostics.detectors.primary_drift_covariance`). The
     full-drive point of each sweep moves with it, so the tone curves are fitted relative to it;
     the other levels keep their own readings. The black's share of the departure is left out of
     the step (each primary is read less the black, so strictly ``C_c + 2 C_K``): its covariance
@@ -360,8 +362,8 @@ def white_constrained(context: DiagnosisContext, gain_only: bool = False
     leak sessions of the diagnosis suite moved by 0.005 mean ΔE00 at most, on average 0.001 worse.
 
     ``gain_only`` (the model's tone curves are flexible, ``tone-curve-shape``): ``C_c`` is the
-    gain part of the primary's covariance alone (``a²/n · P Pᵀ`` and the drift correction's own,
-    :func:`~workbench.diagnostics.detectors.primary_correction_covariance`), so each primary
+    gain part of the primary's covariance alone (``a²/n · P Pᵀ`` and the drift's, a gain too,
+    :func:`~workbench.diagnostics.detectors.primary_drift_covariance`), so each primary
     moves along itself, its chromaticity as read. A flexible curve is a table through its
     sweep's levels relative to the full-drive point; moved by the whole step, a deep blue whose
     reading was 1.8 % bright in X, Y and Z alike (its chromaticity right) was moved 0.5 % in X
@@ -378,7 +380,7 @@ def white_constrained(context: DiagnosisContext, gain_only: bool = False
         read = sweep.full_XYZ + context.black
         own = ((context.noise.gain_sd ** 2 / max(sweep.full_count, 1)) * np.outer(read, read)
                if gain_only else mean_covariance(context.noise, read, sweep.full_count))
-        own = own + primary_correction_covariance(sweep)
+        own = own + primary_drift_covariance(context, sweep)
         full = sweep.full_XYZ + own @ solved
         XYZ = sweep.XYZ.copy()
         XYZ[-1] = full  # the sweep's last level is its full drive (channel_sweeps)
