@@ -430,13 +430,13 @@ def diagnose(session: Session) -> Diagnosis:
             "departure" + (", by a gain alone beside flexible tone curves"
                            if "tone-curve-shape" in terms else "")))
     by_effect = dict(cross_validation["by_effect"])
-    plain = _grey_ramp_without_drift(context, choice, terms, extended is not baseline, found,
-                                     fit_session, load_session, drift_z)
-    if plain is not None:
-        context, choice = plain
+    drift_in = "temporal-drift" in terms and extended is not baseline
+    decided = _grey_ramp_drift(context, choice, drift_in, found, fit_session, load_session,
+                               drift_z)
+    if decided is not None:
+        context, choice, drift_in = decided
         terms = [t for t in terms if t != "temporal-drift"]
     if choice.chosen in ALTERNATIVE_CANDIDATES:
-        drift_in = "temporal-drift" in terms and extended is not baseline
         extended = fit_candidate(choice.chosen, context, found)
         answered = _answered_by(choice.chosen) | ({"temporal-drift"} if drift_in else set())
         terms = [r.effect for r in results if r.found and r.effect in answered]
@@ -472,52 +472,72 @@ def diagnose(session: Session) -> Diagnosis:
                      model_choice=choice)
 
 
-def _grey_ramp_without_drift(context: DiagnosisContext, choice: ModelChoice, terms,
-                             extension_used: bool, found, fit_session, load_session,
-                             drift_z: float | None):
-    """``(context without the drift correction, choice)`` where a grey-ramp candidate was chosen
-    on drift-corrected rows and the correction does not earn its place in it; else None.
+def _grey_ramp_drift(context: DiagnosisContext, choice: ModelChoice, drift_in: bool, found,
+                     fit_session, load_session, drift_z: float | None):
+    """``(context, choice, drift corrected)`` where a grey-ramp candidate was chosen and its own
+    cross-validation decides the drift correction otherwise than term selection did; else None.
 
-    Term selection keeps ``temporal-drift`` by what it does for the extension; a grey ramp
-    chosen over the extension must be served by the correction too. The drift stays where it
-    lowers the candidate's cross-validated error on the fit rows as measured (both versions
-    predict the same rows in the same folds, the corrected one times its drift gain), or, for a
-    drift found on measurement times at z ≥ 4 (:func:`is_timed_drift`), where the uncorrected
-    candidate does not predict them better beyond noise (the settled state, as in term
-    selection). A real HP EliteBook chart (four whites, 94–103 %, drift tested on row order at
-    z 2.6) exported the grey ramp from corrected rows at 2.75 mean ΔE00 on its held-out
+    Term selection keeps or drops ``temporal-drift`` by what it does for the extension; a grey
+    ramp chosen over the extension decides it by the same rule on its own errors. The
+    correction is in where it lowers the candidate's cross-validated error on the fit rows as
+    measured (both versions predict the same rows in the same folds, the corrected one times its
+    drift gain), or, for a drift found on measurement times at z ≥ 4 (:func:`is_timed_drift`),
+    where the uncorrected candidate does not predict them better beyond noise (the settled
+    state, as in term selection).
+
+    Both ways were seen. A real HP EliteBook chart (four whites, 94–103 %, drift tested on row
+    order at z 2.6) exported the grey ramp from corrected rows at 2.75 mean ΔE00 on its held-out
     mixtures, where the same ramp from the rows as measured scores 2.59 and the seed authors'
-    method 2.71.
+    method 2.71. On the authors' plan a bluish black beside a 7.2 % step that fell between
+    two references while the green sweep's top and the blue sweep's start were measured: the
+    correction's ramp across that interval misplaces the green primary by 7 %, the extension
+    predicts the fit rows worse with it (2.96 against 2.39 cross-validated mean ΔE00) and term
+    selection dropped it; the grey ramp then fitted on the rows as measured (two display states
+    7.8 % apart) scored 0.624 mean ΔE00 on hidden colours against the authors' 0.119. The grey
+    ramp's own cross-validation wants the correction (0.711 → 0.213, a gain of 0.50 ± 0.03),
+    and with it the ramp scores 0.063.
     """
-    if not (choice.chosen in GREY_RAMP_CANDIDATES and extension_used
-            and "temporal-drift" in terms and context.drift_found):
+    if not (choice.chosen in GREY_RAMP_CANDIDATES and "temporal-drift" in found
+            and context.drift is not None and context.drift_found == drift_in):
         return None
     name = choice.chosen
     apart = coarse_grey_ramp(context) and name == "grey-ramp"
-    plain = build_context(fit_session, drift_found=False, noise=context.noise,
-                          load_session=load_session)
+    corrected_context = (context if drift_in else
+                         build_context(context.raw, drift_found=True, noise=context.noise,
+                                       load_session=load_session))
+    plain = (build_context(fit_session, drift_found=False, noise=context.noise,
+                           load_session=load_session) if drift_in else context)
 
     def errors_on(fold_source, drift):
         return cross_validated_errors_of(
             fold_source, lambda fold_context, _baseline: fit_candidate(name, fold_context, found),
             drift=drift, greys_apart=apart)
 
-    corrected, measured = errors_on(context, True), errors_on(plain, False)
+    corrected, measured = errors_on(corrected_context, True), errors_on(plain, False)
     if corrected is None or measured is None:
         return None
     gain, standard_error = paired_gain(measured, corrected)  # what the correction buys
     timed = is_timed_drift(context, drift_z)
     needed = -TIMED_DRIFT_Z * standard_error if timed else 0.0
-    if gain > needed:
+    if (gain > needed) == drift_in:
         return None
     with_drift, without = group_mean(*corrected), group_mean(*measured)
-    verdict = ("predicts them worse beyond noise" if timed else
-               "does not lower its cross-validated error")
-    reason = (f"{choice.reason}; fitted on the rows as measured: the drift correction {verdict} "
-              f"({without:.3f} without it vs {with_drift:.3f} with it, a gain of {gain:.3f} ± "
-              f"{standard_error:.3f})")
-    scores = {**choice.cv_mean_dE00, name: without}
-    return plain, replace(choice, reason=reason, cv_mean_dE00=scores)
+    if drift_in:
+        verdict = ("predicts them worse beyond noise" if timed else
+                   "does not lower its cross-validated error")
+        reason = (f"{choice.reason}; fitted on the rows as measured: the drift correction "
+                  f"{verdict} ({without:.3f} without it vs {with_drift:.3f} with it, a gain of "
+                  f"{gain:.3f} ± {standard_error:.3f})")
+    else:
+        verdict = ("lowers its cross-validated error" if gain > 0 else
+                   "does not predict them worse beyond noise")
+        reason = (f"{choice.reason}; fitted on drift-corrected rows: the extension's term "
+                  f"selection left the correction out, but for the {name} model it {verdict} "
+                  f"({without:.3f} without it vs {with_drift:.3f} with it, a gain of "
+                  f"{gain:.3f} ± {standard_error:.3f})")
+    scores = {**choice.cv_mean_dE00, name: with_drift if not drift_in else without}
+    return ((plain, replace(choice, reason=reason, cv_mean_dE00=scores), False) if drift_in else
+            (corrected_context, replace(choice, reason=reason, cv_mean_dE00=scores), True))
 
 
 def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation,
