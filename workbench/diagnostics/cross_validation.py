@@ -249,7 +249,7 @@ def is_timed_drift(context: DiagnosisContext, drift_z: float | None) -> bool:
 
 
 def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_forms=None,
-                 drift_z: float | None = None) -> tuple[list, dict]:
+                 drift_z: float | None = None, refit: bool = True) -> tuple[list, dict]:
     """The terms of ``found`` that improve the cross-validated prediction (module doc).
 
     Returns the terms and a JSON-ready record: the cross-validated mean ΔE00
@@ -257,11 +257,14 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
     extension beats the baseline (``use_extension``), and the tone forms
     (``tone_forms``: chosen by BIC on all fit rows when not given). ``drift_z``: the drift
     test's z, where ``temporal-drift`` is among ``found`` (:data:`TIMED_DRIFT_MIN_Z`).
+    ``refit``: whether the extension's refit with no term may replace the baseline where no term
+    is left (:func:`_with_refit`).
     """
     record = {"folds": FOLDS, "rows": "fit rows only (the validation rows are never read)",
               "by_effect": {}, "steps": [], "use_extension": False, "tone_forms": None}
     if not found:
-        return [], _with_refit(record, context, baseline, cross_validated_errors(context, None))
+        return [], (_with_refit(record, context, baseline, cross_validated_errors(context, None))
+                    if refit else record)
     if tone_forms is None:
         full = fit_extended(context, found, baseline)
         tone_forms = tuple(curve.form for curve in full.tone)
@@ -314,7 +317,7 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
     gain, standard_error = paired_gain(base, errors)
     record["use_extension"] = bool(current) and (gain > -TIMED_DRIFT_Z * standard_error
                                                  if settled else error < base_error)
-    if not current:
+    if not current and refit:
         record = _with_refit(record, context, baseline, base)
     if current and not record["use_extension"]:
         for effect in current:
