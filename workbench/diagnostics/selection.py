@@ -430,7 +430,7 @@ def diagnose(session: Session) -> Diagnosis:
                            power_limit_shown=power_limit == "shown")
     if choice.chosen == "extension" and cross_validation.get("refit"):
         choice = replace(choice, reason=f"{cross_validation['refit']}; {choice.reason}")
-    if choice.chosen == "extension" and constrained_by_whites(context, terms):
+    if choice.chosen == "extension" and not refit and constrained_by_whites(context, terms):
         choice = replace(choice, primaries=(
             f"estimated with the {context.white_count} white references as well: the white less "
             f"the black is their sum within noise (additivity test p "
