@@ -71,8 +71,9 @@ from workbench.diagnostics.model_choice import (
     ModelChoice,
     choose_model,
     coarse_grey_ramp,
-    has_sparse_sweep,
     fit_candidate,
+    has_grey_ramp,
+    has_sparse_sweep,
 )
 from workbench.diagnostics.extension import (
     MATERIALITY_INTERACTION_EXPONENT,
@@ -411,11 +412,13 @@ def diagnose(session: Session) -> Diagnosis:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
                                 load_session=load_session)
     drift_z = next((r.z for r in results if r.effect == "temporal-drift"), None)
-    # between sparse sweeps with no drift found the model choice's weighted candidates stand in
-    # for the refit with no term (``weighted-gamma+greys`` is that refit where there are greys)
+    # the refit with no term reads the greys the paper's model leaves out; between sparse sweeps
+    # with no drift found the model choice's weighted candidates stand in for it
+    # (``weighted-gamma+greys`` is that refit)
     terms, cross_validation = select_terms(
         context, found, baseline, {r.effect: r.impact_dE00 for r in results}, tone_forms,
-        drift_z=drift_z, refit=not (has_sparse_sweep(context) and "temporal-drift" not in found))
+        drift_z=drift_z, refit=has_grey_ramp(context) and not (
+            has_sparse_sweep(context) and "temporal-drift" not in found))
     refit = cross_validation.get("use_extension") and not terms  # the extension with no term
     if (terms or refit) and "temporal-drift" not in terms and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
