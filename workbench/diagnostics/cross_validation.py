@@ -350,8 +350,9 @@ def _with_refit(record: dict, context: DiagnosisContext, baseline, base) -> dict
     ``black-offset`` test has already judged; on the diagnosis suite's 240 clean paper-plan
     sessions it was taken on 54 and scored better on the validation colours on 26 of them and
     worse on 28 (no change in the mean), where on the 60 clean ``paper+greys`` sessions it was
-    taken on 13, 11 better (mean −0.014 ΔE00). It is exported as cross-validated: on the rows as measured (a drift left out by
-    term selection stays out) and without the white references' step on the primaries
+    taken on 13, 11 better (mean −0.014 ΔE00). It is exported as cross-validated: on the rows as
+    measured (a drift left out by term selection stays out) and without the white references'
+    step on the primaries
     (:func:`~workbench.diagnostics.extension.white_constrained`), which refits the power laws
     relative to the moved full-drive points. With that step a clean display of the peer bench
     (the paper plan, seed 55004) scored 0.107 mean ΔE00 on hidden colours, 0.033 without it,

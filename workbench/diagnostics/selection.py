@@ -519,7 +519,7 @@ def _grey_ramp_drift(context: DiagnosisContext, choice: ModelChoice, drift_in: b
     name = choice.chosen
     apart = coarse_grey_ramp(context) and name == "grey-ramp"
     corrected_context = (context if drift_in else
-                         build_context(context.raw, drift_found=True, noise=context.noise,
+                         build_context(fit_session, drift_found=True, noise=context.noise,
                                        load_session=load_session))
     plain = (build_context(fit_session, drift_found=False, noise=context.noise,
                            load_session=load_session) if drift_in else context)
@@ -535,7 +535,7 @@ def _grey_ramp_drift(context: DiagnosisContext, choice: ModelChoice, drift_in: b
     gain, standard_error = paired_gain(measured, corrected)  # what the correction buys
     timed = is_timed_drift(context, drift_z)
     # taking back a correction term selection left out asks for a gain beyond noise, but for
-    # the settled state of a timed drift (Notes)
+    # the settled state of a timed drift (above)
     needed = (-TIMED_DRIFT_Z * standard_error if timed else
               0.0 if drift_in else CV_Z * standard_error)
     if (gain > needed) == drift_in:
