@@ -110,7 +110,7 @@ def _print_text(diagnosis) -> None:
 
     print(f"baseline  {base['model']}: {figures(base)}")
     if not result["findings"]:
-        print("findings  none beyond noise: no named effect passed its test")
+        print("findings  none beyond noise: the paper's model is adequate for this display")
     terms = {t["effect"]: t for t in ext["terms"]}
     attribution = result["attribution"]
     contributions = ({t["effect"]: t for t in attribution["terms"]} if attribution else {})

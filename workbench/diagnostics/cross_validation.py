@@ -249,7 +249,7 @@ def is_timed_drift(context: DiagnosisContext, drift_z: float | None) -> bool:
 
 
 def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_forms=None,
-                 drift_z: float | None = None, refit: bool = True) -> tuple[list, dict]:
+                 drift_z: float | None = None) -> tuple[list, dict]:
     """The terms of ``found`` that improve the cross-validated prediction (module doc).
 
     Returns the terms and a JSON-ready record: the cross-validated mean ΔE00
@@ -257,14 +257,11 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
     extension beats the baseline (``use_extension``), and the tone forms
     (``tone_forms``: chosen by BIC on all fit rows when not given). ``drift_z``: the drift
     test's z, where ``temporal-drift`` is among ``found`` (:data:`TIMED_DRIFT_MIN_Z`).
-    ``refit``: whether the extension's refit with no term may replace the baseline where no term
-    is left (:func:`_with_refit`; the diagnosis offers it where the rows hold a grey ramp).
     """
     record = {"folds": FOLDS, "rows": "fit rows only (the validation rows are never read)",
               "by_effect": {}, "steps": [], "use_extension": False, "tone_forms": None}
     if not found:
-        return [], (_with_refit(record, context, baseline, cross_validated_errors(context, None))
-                    if refit else record)
+        return [], record
     if tone_forms is None:
         full = fit_extended(context, found, baseline)
         tone_forms = tuple(curve.form for curve in full.tone)
@@ -317,8 +314,6 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
     gain, standard_error = paired_gain(base, errors)
     record["use_extension"] = bool(current) and (gain > -TIMED_DRIFT_Z * standard_error
                                                  if settled else error < base_error)
-    if not current and refit:
-        record = _with_refit(record, context, baseline, base)
     if current and not record["use_extension"]:
         for effect in current:
             record["by_effect"][effect] = (
@@ -327,51 +322,3 @@ def select_terms(context: DiagnosisContext, found, baseline, impacts=None, tone_
                    f"{standard_error:.3f}; " if settled else "no better than the baseline (")
                 + f"{error:.3f} vs {base_error:.3f} cross-validated mean ΔE00)")
     return (current if record["use_extension"] else []), record
-
-
-REFIT_FORMS = ("power", "power", "power")
-"""The tone forms of the extension's refit with no term (:func:`_with_refit`): the paper's power
-laws, not a form no finding asked for."""
-
-
-def _with_refit(record: dict, context: DiagnosisContext, baseline, base) -> dict:
-    """``record`` with the extension's refit with no term used where it predicts the fit rows
-    better than the baseline beyond noise (:data:`CV_Z` standard errors).
-
-    The refit is the extension with no term (:func:`~workbench.diagnostics.extension.fit_extended`):
-    the full-drive primaries less the black, and the paper's power laws (:data:`REFIT_FORMS`),
-    the baseline's γ where no grey stands in, refitted to the sweeps and the greys' channel
-    outputs where the rows hold greys. No named effect passed its test, yet the rows may still
-    be better predicted so; the profile exported is then the best model of the rows by
-    cross-validation, and the record says so (``refit``). Beyond noise, not on a lower error
-    alone: on the paper's own model of a clean display the refit is a second fit of the same
-    curves. The diagnosis offers it only where the rows hold a grey ramp: without greys the refit
-    keeps the baseline's γ and differs from the paper's model only in the black, which the
-    ``black-offset`` test has already judged; on the diagnosis suite's 240 clean paper-plan
-    sessions it was taken on 54 and scored better on the validation colours on 26 of them and
-    worse on 28 (no change in the mean), where on the 60 clean ``paper+greys`` sessions it was
-    taken on 13, 11 better (mean −0.014 ΔE00). It is exported as cross-validated: on the rows as
-    measured (a drift left out by term selection stays out) and without the white references'
-    step on the primaries
-    (:func:`~workbench.diagnostics.extension.white_constrained`), which refits the power laws
-    relative to the moved full-drive points. With that step a clean display of the peer bench
-    (the paper plan, seed 55004) scored 0.107 mean ΔE00 on hidden colours, 0.033 without it,
-    the paper's model 0.037; with the drift correction a warm-up beside the sweeps
-    (``paper+greys``, seed 55007) scored 0.183, 0.106 from the rows as measured (the seed
-    authors' method 0.150).
-    """
-    refit = cross_validated_errors(context, [], baseline, REFIT_FORMS)
-    gain, standard_error = paired_gain(base, refit)
-    if not (base is not None and refit is not None and gain > CV_Z * standard_error):
-        return record
-    base_error, refit_error = group_mean(*base), group_mean(*refit)
-    has_greys = bool(np.sum(partial_greys(context.fit.rgb) & ~context.copies) >= 3)
-    return {**record, "use_extension": True, "tone_forms": REFIT_FORMS,
-            "baseline_cv_mean_dE00": base_error, "extension_cv_mean_dE00": refit_error,
-            "steps": record["steps"] + [{"terms": [], "cv_mean_dE00": refit_error}],
-            "refit": (f"no named effect is in the model; the extension's refit with none (the "
-                      f"paper's power laws on the primaries less the black"
-                      + (", refitted to the greys' channel outputs" if has_greys else "")
-                      + f") predicts unseen fit rows better than the paper's model beyond noise "
-                      f"({base_error:.3f} → {refit_error:.3f} cross-validated mean ΔE00, a gain "
-                      f"of {gain:.3f} ± {standard_error:.3f})")}

@@ -197,7 +197,7 @@ def render_report(diagnosis: Diagnosis) -> str:
                 f"{html.escape(evidence)}{because}<br><small>{model_note(f)}</small></li>")
 
     items = "".join(item(f) for f in findings) or (
-        "<li>None beyond noise: no named effect passed its test.</li>")
+        "<li>None beyond noise: the paper's model is adequate.</li>")
     not_found = "".join(
         f"<li>{html.escape(r.effect)} (statistic {r.statistic:.4g} ± {r.standard_error:.2g}, "
         f"z {r.z:.1f} against {r.critical_z:.2f}"

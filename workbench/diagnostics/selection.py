@@ -72,8 +72,6 @@ from workbench.diagnostics.model_choice import (
     choose_model,
     coarse_grey_ramp,
     fit_candidate,
-    has_grey_ramp,
-    has_sparse_sweep,
 )
 from workbench.diagnostics.extension import (
     MATERIALITY_INTERACTION_EXPONENT,
@@ -412,28 +410,20 @@ def diagnose(session: Session) -> Diagnosis:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
                                 load_session=load_session)
     drift_z = next((r.z for r in results if r.effect == "temporal-drift"), None)
-    # the refit with no term reads the greys the paper's model leaves out; between sparse sweeps
-    # with no drift found the model choice's weighted candidates stand in for it
-    # (``weighted-gamma+greys`` is that refit)
     terms, cross_validation = select_terms(
         context, found, baseline, {r.effect: r.impact_dE00 for r in results}, tone_forms,
-        drift_z=drift_z, refit=has_grey_ramp(context) and not (
-            has_sparse_sweep(context) and "temporal-drift" not in found))
-    refit = cross_validation.get("use_extension") and not terms  # the extension with no term
-    if (terms or refit) and "temporal-drift" not in terms and context.drift_found:
+        drift_z=drift_z)
+    if terms and "temporal-drift" not in terms and context.drift_found:
         context = build_context(fit_session, drift_found=False, noise=context.noise,
                                 load_session=load_session)
-    extended = (baseline if not cross_validation.get("use_extension") else
-                fit_extended(context, [], baseline, cross_validation["tone_forms"]) if refit else
-                fit_extended(context, terms, baseline, tone_forms, with_whites=True))
+    extended = (fit_extended(context, terms, baseline, tone_forms, with_whites=True)
+                if cross_validation.get("use_extension") else baseline)
     choice = _choose_model(context, extended is not baseline, terms, cross_validation, baseline,
                            cross_validation.get("tone_forms") or tone_forms,
                            power_limit == "identified", found,
                            power_limit_offered=power_limit == "offered",
                            power_limit_shown=power_limit == "shown")
-    if choice.chosen == "extension" and cross_validation.get("refit"):
-        choice = replace(choice, reason=f"{cross_validation['refit']}; {choice.reason}")
-    if choice.chosen == "extension" and not refit and constrained_by_whites(context, terms):
+    if choice.chosen == "extension" and constrained_by_whites(context, terms):
         choice = replace(choice, primaries=(
             f"estimated with the {context.white_count} white references as well: the white less "
             f"the black is their sum within noise (additivity test p "

@@ -307,7 +307,7 @@ class FindingCards(QScrollArea):
             else:
                 standalone.append(self.action_button)
         if not self.cards:
-            self._set_body(*standalone, _wrapped("No finding beyond noise: no named effect passed its "
-                                                 "test."))
+            self._set_body(*standalone, _wrapped("No finding beyond noise: the paper's model is adequate "
+                                                 "for this display."))
             return
         self._set_body(*standalone, *(self._placed(card) for card in self.cards))
