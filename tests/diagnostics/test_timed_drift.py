@@ -73,8 +73,8 @@ def test_a_grey_ramp_takes_back_a_correction_that_term_selection_dropped():
     # a held-out peer session: a bluish black and a 7.2 % step that fell 8 s after the white at
     # 701 s, between the green sweep's last two levels, and the next white at 1098 s. The
     # correction's ramp across that interval puts the green primary 7 % off, so the extension
-    # predicts the fit rows worse with it and term selection dropped it; the grey ramp chosen
-    # then was fitted on rows of two display states and scored 0.624 ΔE00 on hidden colours
+    # predicts the fit rows worse with it and term selection dropped it; the sweep correction
+    # chosen then was fitted on rows of two display states and scored 0.624 ΔE00 on hidden colours
     # against the authors' 0.119. Its own cross-validation wants the correction
     generated = generate_session("bluish + step", seed=54006, plan="authors-2024")
     diagnosis = diagnose(generated.session)

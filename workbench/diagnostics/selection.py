@@ -544,9 +544,10 @@ def _grey_ramp_drift(context: DiagnosisContext, choice: ModelChoice, drift_in: b
                   f"selection left the correction out, but for the {name} model it {verdict} "
                   f"({without:.3f} without it vs {with_drift:.3f} with it, a gain of "
                   f"{gain:.3f} ± {standard_error:.3f})")
-    scores = {**choice.cv_mean_dE00, name: with_drift if not drift_in else without}
-    return ((plain, replace(choice, reason=reason, cv_mean_dE00=scores), False) if drift_in else
-            (corrected_context, replace(choice, reason=reason, cv_mean_dE00=scores), True))
+    corrected_now = not drift_in  # the verdict goes the other way from term selection's
+    scores = {**choice.cv_mean_dE00, name: with_drift if corrected_now else without}
+    return (corrected_context if corrected_now else plain,
+            replace(choice, reason=reason, cv_mean_dE00=scores), corrected_now)
 
 
 def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation,
