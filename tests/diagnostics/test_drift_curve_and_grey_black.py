@@ -36,6 +36,34 @@ def test_jitter_about_a_decline_is_averaged_out():
     assert np.mean(rms) < 0.6 * sd
 
 
+def test_a_fast_warm_up_does_not_hold_the_settled_references_to_their_noise(monkeypatch):
+    # a warm-up 6.5 % up between the first two references and 1 % more after them, then
+    # settled (as the peer bench's "warm-up beside sweeps" does): one smoothing strength for
+    # the whole curve must follow the bend at the second reference and so copies the noise of
+    # every reference after it (about 1 σ); a free kink at the bend leaves the rest smooth
+    from workbench.diagnostics import evidence
+
+    times = np.array([48.0, 630, 730, 1030, 1130, 1840, 1990, 2270, 2370, 2390, 2500, 2620])
+    truth = 1.0 - 0.08 * np.exp(-times / 300.0)
+    sd = 0.002
+
+    def settled_rms():
+        rms = []
+        for seed in range(40):
+            noise = np.random.default_rng(seed).standard_t(6, times.size) / np.sqrt(1.5)
+            gains = truth * (1.0 + sd * noise)
+            curve = DriftCorrection(times, gains, gains).smoothed_to_noise(
+                np.full(times.size, sd))
+            scale = float(np.mean(truth[-4:] / curve.gain(times[-4:])))  # the curve's shape
+            rms.append(np.sqrt(np.mean((curve.gain(times[1:]) * scale - truth[1:]) ** 2)))
+        return float(np.mean(rms))
+
+    kinked = settled_rms()
+    monkeypatch.setattr(evidence, "MIN_KINK_REFERENCES", times.size + 1)
+    plain = settled_rms()
+    assert kinked < 0.85 * plain and kinked < 0.9 * sd, (kinked, plain)
+
+
 def test_a_step_stays_a_step():
     times = np.arange(12.0)
     truth = np.where(times < 5, 1.03, 1.0)
