@@ -126,8 +126,8 @@ def test_a_correction_term_selection_left_out_comes_back_for_a_grey_ramp_only_be
     diagnosis = diagnose(read_session(LCD / name))
     assert diagnosis.context.time_basis == "row order"
     assert diagnosis.model_choice.chosen == "grey-ramp"
-    assert not diagnosis.context.drift_found
-    assert "fitted on drift-corrected rows" not in diagnosis.model_choice.reason
+    assert not diagnosis.context.drift_found and not diagnosis.model_choice.drift_corrected
+    assert "scored on drift-corrected rows" not in diagnosis.model_choice.reason
     drift = next(f for f in diagnosis.findings if f.effect == "temporal-drift")
     assert not drift.in_model
     row = _row(LCD / name, REAL, with_argyll=False)

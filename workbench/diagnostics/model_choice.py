@@ -370,26 +370,30 @@ class ModelChoice:
     ``cv_mean_dE00`` maps candidate id → cross-validated mean ΔE00 of the fit
     rows (inf where a fold could not be fitted, absent where not applicable);
     ``primaries`` says how the exported model's full-drive primaries were estimated
-    (:data:`PRIMARIES_AS_MEASURED`, or with the white references).
+    (:data:`PRIMARIES_AS_MEASURED`, or with the white references); ``drift_corrected``: a
+    grey-ramp candidate chosen on drift-corrected rows where term selection had left the
+    correction out (:func:`choose_model`'s ``grey_ramp_corrected``).
     """
 
     chosen: str
     cv_mean_dE00: dict = field(default_factory=dict)
     reason: str = ""
     primaries: str = PRIMARIES_AS_MEASURED
+    drift_corrected: bool = False
 
     def to_json(self) -> dict:
         return {"chosen": self.chosen, "description": MODEL_CANDIDATES[self.chosen],
                 "cv_mean_dE00": {k: (v if np.isfinite(v) else None)
                                  for k, v in self.cv_mean_dE00.items()},
                 "reason": self.reason, "candidates": dict(MODEL_CANDIDATES),
-                "primaries": self.primaries}
+                "primaries": self.primaries, "drift_corrected": self.drift_corrected}
 
 
 def choose_model(context: DiagnosisContext, current: str, current_errors, baseline_errors,
                  drift: bool, power_limit: bool = False, found=(),
                  extension_terms=(), power_limit_offered: bool = False,
-                 current_errors_apart=None, power_limit_shown: bool = False) -> ModelChoice:
+                 current_errors_apart=None, power_limit_shown: bool = False,
+                 grey_ramp_corrected=None) -> ModelChoice:
     """The exported model: term selection's, or an alternative that replaces it (Notes).
 
     Parameters
@@ -432,6 +436,12 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         ``current``'s per-row cross-validated errors with the greys in two folds of their
         own (:func:`~workbench.diagnostics.cross_validation.fold_of_rows`), computed only
         where a coarse grey ramp meets the extension between sparse sweeps (Notes).
+    grey_ramp_corrected : callable or None
+        Where a drift was found and term selection left its correction out (``drift`` false):
+        ``grey_ramp_corrected(name, greys_apart, errors)`` gives a grey-ramp candidate's
+        errors on drift-corrected rows, with the correction's gain and its standard error,
+        where the correction serves that candidate (else None); the candidate then competes so
+        and, chosen, is fitted on drift-corrected rows (``drift_corrected``).
 
     Notes
     -----
@@ -561,11 +571,27 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                     and has_sparse_sweep(context)) else ())
              + (GREY_RAMP_CANDIDATES if greys else ()))
     apart = coarse_grey_ramp(context)
+    corrected_names, corrected_notes = set(), {}
     for name in names:
         errors = cross_validated_errors_of(
             context, lambda fold_context, _baseline, name=name: fit_candidate(
                 name, fold_context, found),
             drift=drift, greys_apart=apart and name == "grey-ramp")
+        # a drift term selection left out may still serve a candidate that reads the greys,
+        # measured at their own stretch of the session: its own cross-validation decides
+        taken = (grey_ramp_corrected(name, apart and name == "grey-ramp", errors)
+                 if name in GREY_RAMP_CANDIDATES and grey_ramp_corrected is not None
+                 and not drift else None)
+        if taken is not None:
+            corrected, drift_gain, drift_error = taken
+            corrected_notes[name] = (
+                f"{name} scored on drift-corrected rows: term selection left the correction "
+                f"out, but it " + ("lowers" if drift_gain > 0 else "does not raise beyond noise")
+                + f" {name}'s cross-validated error ({score(errors):.3f} "
+                f"without it, {score(corrected):.3f} with it, {drift_gain:.3f} ± "
+                f"{drift_error:.3f})")
+            errors = corrected
+            corrected_names.add(name)
         scores[name] = score(errors)
         # between sparse sweeps the coarse grey ramp meets term selection's extension on the
         # same folds, the greys apart for both, and must beat it beyond noise (Notes)
@@ -722,4 +748,6 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
         reason = (f"{chosen} predicts unseen fit rows better than the {current} "
                   f"({scores[chosen]:.3f} against {scores[current]:.3f} cross-validated mean "
                   f"ΔE00; {'; '.join(notes)})")
-    return ModelChoice(chosen, scores, reason)
+    if chosen in corrected_notes:
+        reason += f"; {corrected_notes[chosen]}"
+    return ModelChoice(chosen, scores, reason, drift_corrected=chosen in corrected_names)

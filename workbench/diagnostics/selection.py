@@ -418,11 +418,15 @@ def diagnose(session: Session) -> Diagnosis:
                                 load_session=load_session)
     extended = (fit_extended(context, terms, baseline, tone_forms, with_whites=True)
                 if cross_validation.get("use_extension") else baseline)
+    drift_in = "temporal-drift" in terms and extended is not baseline
+    drift_left_out = "temporal-drift" in found and context.drift is not None and not drift_in
     choice = _choose_model(context, extended is not baseline, terms, cross_validation, baseline,
                            cross_validation.get("tone_forms") or tone_forms,
                            power_limit == "identified", found,
                            power_limit_offered=power_limit == "offered",
-                           power_limit_shown=power_limit == "shown")
+                           power_limit_shown=power_limit == "shown",
+                           grey_ramp_corrected=_grey_ramp_correction(context, found, drift_z)
+                           if drift_left_out else None)
     if choice.chosen == "extension" and constrained_by_whites(context, terms):
         choice = replace(choice, primaries=(
             f"estimated with the {context.white_count} white references as well: the white less "
@@ -431,12 +435,22 @@ def diagnose(session: Session) -> Diagnosis:
             "departure" + (", by a gain alone beside flexible tone curves"
                            if "tone-curve-shape" in terms else "")))
     by_effect = dict(cross_validation["by_effect"])
-    drift_in = "temporal-drift" in terms and extended is not baseline
-    decided = _grey_ramp_drift(context, choice, drift_in, found, fit_session, load_session,
-                               drift_z)
-    if decided is not None:
-        context, choice, drift_in = decided
-        terms = [t for t in terms if t != "temporal-drift"]
+    if choice.chosen in GREY_RAMP_CANDIDATES and drift_left_out:
+        # the choice scored the candidate on corrected rows where its own cross-validation
+        # wanted them; where term selection left the rows corrected they stay so
+        # (the found drift's correction carries the rows to the settled state, and a wander
+        # found at z 3.4 on the authors' plan, within noise either way on the fit rows, scores
+        # 0.092 mean ΔE00 on hidden colours so and 0.157 from the rows as measured)
+        if choice.drift_corrected and not context.drift_found:
+            context = build_context(fit_session, drift_found=True, noise=context.noise,
+                                    load_session=load_session)
+        drift_in = context.drift_found
+    elif drift_in:
+        decided = _grey_ramp_drift(context, choice, found, fit_session, load_session, drift_z)
+        if decided is not None:
+            context, choice = decided
+            drift_in = False
+            terms = [t for t in terms if t != "temporal-drift"]
     if choice.chosen in ALTERNATIVE_CANDIDATES:
         extended = fit_candidate(choice.chosen, context, found)
         answered = _answered_by(choice.chosen) | ({"temporal-drift"} if drift_in else set())
@@ -473,87 +487,101 @@ def diagnose(session: Session) -> Diagnosis:
                      model_choice=choice)
 
 
-def _grey_ramp_drift(context: DiagnosisContext, choice: ModelChoice, drift_in: bool, found,
-                     fit_session, load_session, drift_z: float | None):
-    """``(context, choice, drift corrected)`` where a grey-ramp candidate was chosen and its own
-    cross-validation decides the drift correction otherwise than term selection did; else None.
+def _grey_ramp_drift(context: DiagnosisContext, choice: ModelChoice, found, fit_session,
+                     load_session, drift_z: float | None):
+    """``(context, choice)`` fitted on the rows as measured where term selection kept the drift
+    correction, a grey-ramp candidate was chosen and its own cross-validation does not want
+    the correction; else None.
 
     Term selection keeps or drops ``temporal-drift`` by what it does for the extension; a grey
     ramp chosen over the extension decides it by the same rule on its own errors (both versions
     predict the fit rows as measured, in the same folds, the corrected one times its drift
-    gain). A correction term selection kept stays where it lowers the candidate's
-    cross-validated error; one it left out comes back where it lowers it beyond noise
-    (:data:`~workbench.diagnostics.cross_validation.CV_Z` standard errors: it overturns term
-    selection's verdict). For a drift found on measurement times at z ≥ 4
-    (:func:`is_timed_drift`) both ways the correction is in unless the uncorrected candidate
-    predicts the rows better beyond noise (the settled state, as in term selection).
+    gain): the correction stays where it lowers the candidate's cross-validated error, and for
+    a drift found on measurement times at z ≥ 4 (:func:`is_timed_drift`) unless the uncorrected
+    candidate predicts the rows better beyond noise (the settled state, as in term selection).
+    The other way, a correction term selection left out, the choice decides as it scores the
+    candidates (:func:`_grey_ramp_correction`).
 
-    Both ways were seen. A real HP EliteBook chart (four whites, 94–103 %, drift tested on row
-    order at z 2.6) exported the grey ramp from corrected rows at 2.75 mean ΔE00 on its held-out
-    mixtures, where the same ramp from the rows as measured scores 2.59 and the seed authors'
-    method 2.71. On the authors' plan a bluish black beside a 7.2 % step that fell between
-    two references while the green sweep's top and the blue sweep's start were measured: the
-    correction's ramp across that interval misplaces the green primary by 7 %, the extension
-    predicts the fit rows worse with it (2.96 against 2.39 cross-validated mean ΔE00) and term
-    selection dropped it; the sweep correction then fitted on the rows as measured (two display
-    states 7.8 % apart) scored 0.624 mean ΔE00 on hidden colours against the authors' 0.119. Its
-    own cross-validation wants the correction (0.489 → 0.214, a gain of 0.28 ± 0.02), and with
-    it the sweep correction scores 0.076. Beyond noise on row order: a real Surface Pro 3 chart
-    (drift on row order at z 4.9, left out by term selection) took the correction back for its
-    grey ramp on a gain of 0.138 ± 0.072 and scored 1.59 mean ΔE00 on its 108 held-out
-    colours, 1.41 from the rows as measured (the seed authors' method 1.41).
+    A real HP EliteBook chart (four whites, 94–103 %, drift tested on row order at z 2.6)
+    exported the grey ramp from corrected rows at 2.75 mean ΔE00 on its held-out mixtures,
+    where the same ramp from the rows as measured scores 2.59 and the seed authors' method 2.71.
     """
     if not (choice.chosen in GREY_RAMP_CANDIDATES and "temporal-drift" in found
-            and context.drift is not None and context.drift_found == drift_in):
+            and context.drift is not None and context.drift_found):
         return None
     name = choice.chosen
     apart = coarse_grey_ramp(context) and name == "grey-ramp"
-    corrected_context = (context if drift_in else
-                         build_context(fit_session, drift_found=True, noise=context.noise,
-                                       load_session=load_session))
-    plain = (build_context(fit_session, drift_found=False, noise=context.noise,
-                           load_session=load_session) if drift_in else context)
+    plain = build_context(fit_session, drift_found=False, noise=context.noise,
+                          load_session=load_session)
 
     def errors_on(fold_source, drift):
         return cross_validated_errors_of(
             fold_source, lambda fold_context, _baseline: fit_candidate(name, fold_context, found),
             drift=drift, greys_apart=apart)
 
-    corrected, measured = errors_on(corrected_context, True), errors_on(plain, False)
+    corrected, measured = errors_on(context, True), errors_on(plain, False)
     if corrected is None or measured is None:
         return None
     gain, standard_error = paired_gain(measured, corrected)  # what the correction buys
     timed = is_timed_drift(context, drift_z)
-    # taking back a correction term selection left out asks for a gain beyond noise, but for
-    # the settled state of a timed drift (above)
-    needed = (-TIMED_DRIFT_Z * standard_error if timed else
-              0.0 if drift_in else CV_Z * standard_error)
-    if (gain > needed) == drift_in:
+    if gain > (-TIMED_DRIFT_Z * standard_error if timed else 0.0):
         return None
     with_drift, without = group_mean(*corrected), group_mean(*measured)
-    if drift_in:
-        verdict = ("predicts them worse beyond noise" if timed else
-                   "does not lower its cross-validated error")
-        reason = (f"{choice.reason}; fitted on the rows as measured: the drift correction "
-                  f"{verdict} ({without:.3f} without it vs {with_drift:.3f} with it, a gain of "
-                  f"{gain:.3f} ± {standard_error:.3f})")
-    else:
-        verdict = ("lowers its cross-validated error" if gain > 0 else
-                   "does not predict them worse beyond noise")
-        reason = (f"{choice.reason}; fitted on drift-corrected rows: the extension's term "
-                  f"selection left the correction out, but for the {name} model it {verdict} "
-                  f"({without:.3f} without it vs {with_drift:.3f} with it, a gain of "
-                  f"{gain:.3f} ± {standard_error:.3f})")
-    corrected_now = not drift_in  # the verdict goes the other way from term selection's
-    scores = {**choice.cv_mean_dE00, name: with_drift if corrected_now else without}
-    return (corrected_context if corrected_now else plain,
-            replace(choice, reason=reason, cv_mean_dE00=scores), corrected_now)
+    verdict = ("predicts them worse beyond noise" if timed else
+               "does not lower its cross-validated error")
+    reason = (f"{choice.reason}; fitted on the rows as measured: the drift correction "
+              f"{verdict} ({without:.3f} without it vs {with_drift:.3f} with it, a gain of "
+              f"{gain:.3f} ± {standard_error:.3f})")
+    return plain, replace(choice, reason=reason, cv_mean_dE00={**choice.cv_mean_dE00,
+                                                               name: without})
+
+
+def _grey_ramp_correction(context: DiagnosisContext, found, drift_z: float | None):
+    """Where a drift was found and term selection left its correction out: for
+    :func:`~workbench.diagnostics.model_choice.choose_model`, a grey-ramp candidate's
+    cross-validated errors on drift-corrected rows with the correction's gain and its standard
+    error, where the correction serves that candidate; else None.
+
+    Term selection decides the correction by what it does for the extension; a grey ramp reads
+    its tone curves from the greys, measured in a stretch of the session of their own, and
+    decides by its own errors. Taking back a correction term selection left out asks for a gain
+    beyond noise (:data:`~workbench.diagnostics.cross_validation.CV_Z` standard errors: it
+    overturns term selection's verdict), but for a drift found on measurement times at z ≥ 4
+    (:func:`is_timed_drift`): there the correction is in unless the rows as measured predict
+    better beyond noise (the settled state, as in term selection).
+
+    On the authors' plan a bluish black beside a 7.2 % step that fell between two references
+    while the green sweep's top and the blue sweep's start were measured: the correction's ramp
+    across that interval misplaces the green primary by 7 %, the extension predicts the fit
+    rows worse with it (2.96 against 2.39 cross-validated mean ΔE00) and term selection dropped
+    it; the sweep correction then fitted on the rows as measured (two display states 7.8 %
+    apart) scored 0.624 mean ΔE00 on hidden colours against the authors' 0.119. Its own
+    cross-validation wants the correction (0.489 → 0.214, a gain of 0.28 ± 0.02), and with it
+    the sweep correction scores 0.076. Beyond noise on row order: a real Surface Pro 3 chart
+    (drift on row order at z 4.9, left out by term selection) took the correction back for its
+    grey ramp on a gain of 0.138 ± 0.072 and scored 1.59 mean ΔE00 on its 108 held-out
+    colours, 1.41 from the rows as measured (the seed authors' method 1.41).
+    """
+    needed_z = -TIMED_DRIFT_Z if is_timed_drift(context, drift_z) else CV_Z
+
+    def corrected(name: str, greys_apart: bool, measured):
+        if measured is None:
+            return None
+        errors = cross_validated_errors_of(
+            context, lambda fold_context, _baseline: fit_candidate(name, fold_context, found),
+            drift=True, greys_apart=greys_apart)
+        if errors is None:
+            return None
+        gain, standard_error = paired_gain(measured, errors)  # what the correction buys
+        return (errors, gain, standard_error) if gain > needed_z * standard_error else None
+
+    return corrected
 
 
 def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_validation,
                   baseline, tone_forms, power_limit: bool = False, found=(),
-                  power_limit_offered: bool = False, power_limit_shown: bool = False
-                  ) -> ModelChoice:
+                  power_limit_offered: bool = False, power_limit_shown: bool = False,
+                  grey_ramp_corrected=None) -> ModelChoice:
     """:func:`~workbench.diagnostics.model_choice.choose_model` on term selection's result."""
     baseline_errors = cross_validated_errors(context, None)
     current_errors = (cross_validated_errors(context, terms, baseline, tone_forms)
@@ -563,6 +591,7 @@ def _choose_model(context: DiagnosisContext, extension_used: bool, terms, cross_
                         power_limit=power_limit, found=found,
                         power_limit_offered=power_limit_offered,
                         power_limit_shown=power_limit_shown,
+                        grey_ramp_corrected=grey_ramp_corrected,
                         extension_terms=tuple(terms) if extension_used else (),
                         current_errors_apart=(lambda: cross_validated_errors(
                             context, terms, baseline, tone_forms, greys_apart=True))
