@@ -215,8 +215,8 @@ class DriftCorrection:
         best, best_cp, best_hat = self.gains, cp(self.gains, n), np.eye(n)
         second = np.diff(np.eye(n), 2, axis=0)
         # the smoother over every reference, and where there are enough of them, one with a
-        # free kink at each inner reference (its second difference there unpenalised; one
-        # degree of freedom more for where the kink falls)
+        # free kink at each inner reference (its second difference there unpenalised;
+        # KINK_EDF degrees of freedom more for where the kink falls)
         penalties = [(second, 0.0)] + ([(np.delete(second, k - 1, axis=0), KINK_EDF)
                                         for k in range(1, n - 1)] if n >= MIN_KINK_REFERENCES
                                        else [])
