@@ -64,6 +64,35 @@ def test_a_fast_warm_up_does_not_hold_the_settled_references_to_their_noise(monk
     assert kinked < 0.85 * plain and kinked < 0.9 * sd, (kinked, plain)
 
 
+@pytest.mark.parametrize("kink", [None, 3])
+def test_the_smoothers_at_every_strength_are_the_whittaker_solves(kink):
+    # every strength at once through one eigendecomposition: the same curve, effective degrees
+    # of freedom and hat as solving (W + s P) c = W g at each strength
+    from workbench.diagnostics.evidence import SMOOTHING_STRENGTHS, _smoother_path
+
+    rng = np.random.default_rng(7)
+    n = 14
+    times = np.sort(rng.uniform(0, 3000, n))
+    sd = rng.uniform(0.002, 0.006, n)  # unequal noise: the basis is weighted, not plain
+    gains = (1 - 0.05 / (1 + (times / 400) ** 2)) * (1 + sd * rng.standard_t(5, n))
+    rows = np.diff(np.eye(n), 2, axis=0)
+    if kink is not None:
+        rows = np.delete(rows, kink - 1, axis=0)
+    weight = np.diag(sd ** -2.0)
+    scores, hats = [], []
+    for strength in SMOOTHING_STRENGTHS:
+        hat = np.linalg.solve(weight + strength / np.mean(sd) ** 2 * rows.T @ rows, weight)
+        curve = hat @ gains
+        scores.append(np.sum(((curve - gains) / sd) ** 2) + 2 * (np.trace(hat) + 1.5))
+        hats.append(hat)
+    pick = int(np.argmin(scores))
+    score, curve, hat = _smoother_path(gains, sd, rows, 1.5)
+    assert score == pytest.approx(scores[pick], rel=1e-9)
+    np.testing.assert_allclose(hat, hats[pick], atol=1e-9)
+    np.testing.assert_allclose(curve, hats[pick] @ gains, atol=1e-12)
+    assert 0 < pick < len(SMOOTHING_STRENGTHS) - 1  # a strength inside the grid was chosen
+
+
 def test_a_step_stays_a_step():
     times = np.arange(12.0)
     truth = np.where(times < 5, 1.03, 1.0)

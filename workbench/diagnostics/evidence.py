@@ -207,7 +207,6 @@ class DriftCorrection:
         n = self.gains.size
         if n < 3 or not np.all(sd > 0):
             return self
-        weight = np.diag(1.0 / sd ** 2)
 
         def cp(curve, edf):
             return float(np.sum(((curve - self.gains) / sd) ** 2) + 2.0 * edf)
@@ -221,13 +220,9 @@ class DriftCorrection:
                                         for k in range(1, n - 1)] if n >= MIN_KINK_REFERENCES
                                        else [])
         for rows, located in penalties:
-            penalty = rows.T @ rows
-            for strength in np.logspace(-6, 4, 41):
-                hat = np.linalg.solve(weight + strength / np.mean(sd) ** 2 * penalty, weight)
-                curve = hat @ self.gains
-                score = cp(curve, np.trace(hat) + located)
-                if score < best_cp:
-                    best, best_cp, best_hat = curve, score, hat
+            score, curve, hat = _smoother_path(self.gains, sd, rows, located)
+            if score < best_cp:
+                best, best_cp, best_hat = curve, score, hat
         if n >= 4:
             step, step_hat = _best_step(self.gains, sd)
             if cp(step, STEP_EDF) < best_cp:
@@ -347,6 +342,36 @@ def settled_weights(times: np.ndarray, gains: np.ndarray, sd: np.ndarray) -> np.
             weights = np.zeros(gains.size)
             weights[-k:] = w / np.sum(w)
     return weights
+
+
+SMOOTHING_STRENGTHS = np.logspace(-6, 4, 41)
+"""The Whittaker smoothers' strengths that :meth:`DriftCorrection.smoothed_to_noise` scores, in
+units of the references' mean variance."""
+
+
+def _smoother_path(gains: np.ndarray, sd: np.ndarray, rows: np.ndarray,
+                   located: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """The Whittaker smoother of least Mallows' Cp over :data:`SMOOTHING_STRENGTHS`, its penalty
+    ``rows`` (differences, one per row): ``(Cp, curve, hat matrix)``, ``located`` degrees of
+    freedom added to each hat's trace.
+
+    Every strength at once, in the Demmler–Reinsch basis: with ``W = diag(sd⁻²)`` and ``P`` the
+    penalty, the hat ``(W + s P)⁻¹ W`` is ``S U diag(1 / (1 + s λ)) Uᵀ S⁻¹`` (``S = diag(sd)``,
+    ``U Λ Uᵀ`` the eigendecomposition of ``S P S``), so one symmetric eigendecomposition serves
+    the 41 strengths that a dense solve each would (a drift session's every fold scores the
+    n − 1 penalties of n references: 1.3 s of a 12-reference session's 3.3 s went to those
+    solves). The trace is ``Σ 1 / (1 + s λ)``; the first of equal scores is taken, as the
+    strengths rise.
+    """
+    penalty = rows.T @ rows
+    eigenvalues, basis = np.linalg.eigh(sd[:, None] * penalty * sd[None, :])
+    eigenvalues = np.clip(eigenvalues, 0.0, None)  # P is positive semi-definite
+    shrink = 1.0 / (1.0 + np.outer(SMOOTHING_STRENGTHS / np.mean(sd) ** 2, eigenvalues))
+    curves = ((shrink * (basis.T @ (gains / sd))) @ basis.T) * sd
+    scores = np.sum(((curves - gains) / sd) ** 2, axis=1) + 2.0 * (shrink.sum(axis=1) + located)
+    pick = int(np.argmin(scores))
+    hat = (sd[:, None] * (basis * shrink[pick]) @ basis.T) / sd[None, :]
+    return float(scores[pick]), curves[pick], hat
 
 
 def _best_step(gains: np.ndarray, sd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
