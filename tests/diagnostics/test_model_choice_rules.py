@@ -30,13 +30,11 @@ def given_errors(monkeypatch):
     monkeypatch.setattr(model_choice, "has_sparse_sweep", lambda context: True)
     monkeypatch.setattr(model_choice, "coarse_grey_ramp", lambda context: table.get("coarse", False))
 
-    def errors_of(context, fit, drift, greys_apart=False):
-        # the candidate's name is bound as the lambda's default argument
-        name = fit.__defaults__[0]
+    def errors_of(name, context, found=(), drift=False, greys_apart=False):
         table.setdefault("apart", {})[name] = greys_apart
         return table[name]
 
-    monkeypatch.setattr(model_choice, "cross_validated_errors_of", errors_of)
+    monkeypatch.setattr(model_choice, "candidate_errors", errors_of)
     return table
 
 

@@ -64,7 +64,8 @@ __all__ = ["MODEL_CANDIDATES", "GREY_RAMP_CANDIDATES", "WEIGHTED_CANDIDATES",
            "ALTERNATIVE_CANDIDATES", "IDENTIFIED_CANDIDATES", "NOISE_TESTED_CANDIDATES",
            "SPARSE_SWEEP_LEVELS", "COARSE_GREY_STEP", "PAPERS_MODELS", "PRIMARIES_AS_MEASURED",
            "ModelChoice", "choose_model",
-           "bends_between_greys", "coarse_grey_ramp", "fit_candidate", "has_grey_ramp",
+           "bends_between_greys", "candidate_errors", "coarse_grey_ramp", "fit_candidate",
+           "has_grey_ramp",
            "has_sparse_sweep"]
 
 MODEL_CANDIDATES = {
@@ -347,6 +348,17 @@ def fit_candidate(name: str, context: DiagnosisContext, found=()) -> DisplayMode
                                            and not has_sparse_sweep(context)))
 
 
+def candidate_errors(name: str, context: DiagnosisContext, found=(), drift: bool = False,
+                     greys_apart: bool = False):
+    """``name``'s cross-validated errors on ``context``'s fit rows (:func:`fit_candidate` refitted
+    in every fold; ``drift`` and ``greys_apart`` as
+    :func:`~workbench.diagnostics.cross_validation.cross_validated_errors_of` takes them), or None
+    where the rows cannot score it."""
+    return cross_validated_errors_of(
+        context, lambda fold_context, _baseline: fit_candidate(name, fold_context, found),
+        drift=drift, greys_apart=greys_apart)
+
+
 def bends_between_greys(context: DiagnosisContext) -> bool:
     """Whether the ``grey-ramp`` candidate follows power laws between its greys
     (:func:`fit_candidate`): between sparse sweeps (:func:`has_sparse_sweep`), or where its
@@ -573,10 +585,8 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
     apart = coarse_grey_ramp(context)
     corrected_names, corrected_notes = set(), {}
     for name in names:
-        errors = cross_validated_errors_of(
-            context, lambda fold_context, _baseline, name=name: fit_candidate(
-                name, fold_context, found),
-            drift=drift, greys_apart=apart and name == "grey-ramp")
+        errors = candidate_errors(name, context, found, drift=drift,
+                                  greys_apart=apart and name == "grey-ramp")
         # a drift term selection left out may still serve a candidate that reads the greys,
         # measured at their own stretch of the session: its own cross-validation decides
         taken = (grey_ramp_corrected(name, apart and name == "grey-ramp", errors)

@@ -56,7 +56,6 @@ from workbench.diagnostics.cross_validation import (
     CV_Z,
     TIMED_DRIFT_Z,
     cross_validated_errors,
-    cross_validated_errors_of,
     group_mean,
     is_timed_drift,
     paired_gain,
@@ -69,6 +68,7 @@ from workbench.diagnostics.model_choice import (
     GREY_RAMP_CANDIDATES,
     WEIGHTED_CANDIDATES,
     ModelChoice,
+    candidate_errors,
     choose_model,
     coarse_grey_ramp,
     fit_candidate,
@@ -515,9 +515,7 @@ def _grey_ramp_drift(context: DiagnosisContext, choice: ModelChoice, found, fit_
                           load_session=load_session)
 
     def errors_on(fold_source, drift):
-        return cross_validated_errors_of(
-            fold_source, lambda fold_context, _baseline: fit_candidate(name, fold_context, found),
-            drift=drift, greys_apart=apart)
+        return candidate_errors(name, fold_source, found, drift=drift, greys_apart=apart)
 
     corrected, measured = errors_on(context, True), errors_on(plain, False)
     if corrected is None or measured is None:
@@ -567,9 +565,7 @@ def _grey_ramp_correction(context: DiagnosisContext, found, drift_z: float | Non
     def corrected(name: str, greys_apart: bool, measured):
         if measured is None:
             return None
-        errors = cross_validated_errors_of(
-            context, lambda fold_context, _baseline: fit_candidate(name, fold_context, found),
-            drift=True, greys_apart=greys_apart)
+        errors = candidate_errors(name, context, found, drift=True, greys_apart=greys_apart)
         if errors is None:
             return None
         gain, standard_error = paired_gain(measured, errors)  # what the correction buys
