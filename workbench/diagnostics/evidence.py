@@ -14,6 +14,7 @@ import numpy as np
 from scipy import stats
 
 from workbench.display.gamma_matrix import RAMP_KINDS
+from workbench.display.smoothing import weighted_eigenbasis
 from workbench.errors import InputError
 from workbench.session import Session
 
@@ -355,22 +356,19 @@ def _smoother_path(gains: np.ndarray, sd: np.ndarray, rows: np.ndarray,
     ``rows`` (differences, one per row): ``(Cp, curve, hat matrix)``, ``located`` degrees of
     freedom added to each hat's trace.
 
-    Every strength at once, in the Demmler–Reinsch basis: with ``W = diag(sd⁻²)`` and ``P`` the
-    penalty, the hat ``(W + s P)⁻¹ W`` is ``S U diag(1 / (1 + s λ)) Uᵀ S⁻¹`` (``S = diag(sd)``,
-    ``U Λ Uᵀ`` the eigendecomposition of ``S P S``), so one symmetric eigendecomposition serves
-    the 41 strengths that a dense solve each would (a drift session's every fold scores the
-    n − 1 penalties of n references: 1.3 s of a 12-reference session's 3.3 s went to those
-    solves). The trace is ``Σ 1 / (1 + s λ)``; the first of equal scores is taken, as the
-    strengths rise.
+    Every strength at once, in the Demmler–Reinsch basis
+    (:func:`~workbench.display.smoothing.weighted_eigenbasis`, ``W = diag(sd⁻²)``): one
+    symmetric eigendecomposition serves the 41 strengths that a dense solve each would (a drift
+    session's every fold scores the n − 1 penalties of n references: 1.3 s of a 12-reference
+    session's 3.3 s went to those solves). The trace is ``Σ 1 / (1 + s λ)``; the first of equal
+    scores is taken, as the strengths rise.
     """
-    penalty = rows.T @ rows
-    eigenvalues, basis = np.linalg.eigh(sd[:, None] * penalty * sd[None, :])
-    eigenvalues = np.clip(eigenvalues, 0.0, None)  # P is positive semi-definite
+    eigenvalues, basis, root = weighted_eigenbasis(rows, sd ** -2.0)
     shrink = 1.0 / (1.0 + np.outer(SMOOTHING_STRENGTHS / np.mean(sd) ** 2, eigenvalues))
-    curves = ((shrink * (basis.T @ (gains / sd))) @ basis.T) * sd
+    curves = ((shrink * (basis.T @ (root * gains))) @ basis.T) / root
     scores = np.sum(((curves - gains) / sd) ** 2, axis=1) + 2.0 * (shrink.sum(axis=1) + located)
     pick = int(np.argmin(scores))
-    hat = (sd[:, None] * (basis * shrink[pick]) @ basis.T) / sd[None, :]
+    hat = ((basis * shrink[pick]) @ basis.T) * root[None, :] / root[:, None]
     return float(scores[pick]), curves[pick], hat
 
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["STRENGTHS", "PinnedSmooth", "whittaker_pinned"]
+__all__ = ["STRENGTHS", "PinnedSmooth", "weighted_eigenbasis", "whittaker_pinned"]
 
 STRENGTHS = 10.0 ** np.arange(-6.0, 10.01, 0.5)
 """Smoothing strengths tried, from a near-interpolation to a straight line between the pins."""
@@ -54,6 +54,21 @@ def _second_differences(x: np.ndarray) -> np.ndarray:
     return rows * np.mean(h) ** 2
 
 
+def weighted_eigenbasis(penalty_rows: np.ndarray, weights: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(Λ, U, W^½)``: the eigendecomposition ``U Λ Uᵀ`` of the penalty ``P = Dᵀ D``
+    (``penalty_rows`` the rows of ``D``) weighted as ``Q = W^-½ P W^-½``, ``W = diag(weights)``.
+
+    With ``W^½ (W + λP) W^-½ = I + λQ`` the Whittaker smoother's hat ``(W + λP)⁻¹ W`` is
+    ``W^-½ U (I + λΛ)⁻¹ Uᵀ W^½`` at every strength ``λ`` (the Demmler–Reinsch basis): one
+    symmetric eigendecomposition, then O(n²) a strength rather than a solve. ``Λ`` is clipped
+    at zero (``P`` is positive semi-definite)."""
+    root = np.sqrt(weights)
+    scaled = penalty_rows / root[None, :]
+    eigenvalues, vectors = np.linalg.eigh(scaled.T @ scaled)
+    return np.maximum(eigenvalues, 0.0), vectors, root
+
+
 def whittaker_pinned(x, y, weights) -> PinnedSmooth | None:
     """Smooth ``y`` at ``x[1:-1]`` (``weights`` there), pinned to 0 at ``x[0]`` and ``x[-1]``.
 
@@ -65,12 +80,8 @@ def whittaker_pinned(x, y, weights) -> PinnedSmooth | None:
     if x.size < 5 or y.size != x.size - 2 or w.shape != y.shape:
         return None
     penalty_rows = _second_differences(x)[:, 1:-1]  # the pinned ends contribute zero
-    # with W^½ A W^-½ = I + λ·s·Q and Q = W^-½ P W^-½ = U Λ Uᵀ, every strength costs O(n²):
     # the hat matrix W^-½ U (I + λsΛ)⁻¹ Uᵀ W^½ has the diagonal of U (I + λsΛ)⁻¹ Uᵀ
-    root = np.sqrt(w)
-    scaled = penalty_rows / root[None, :]
-    eigenvalues, vectors = np.linalg.eigh(scaled.T @ scaled)
-    eigenvalues = np.maximum(eigenvalues, 0.0)
+    eigenvalues, vectors, root = weighted_eigenbasis(penalty_rows, w)
     rotated = vectors.T @ (root * y)
     squares = vectors ** 2
     scale = float(np.median(w))
