@@ -82,6 +82,44 @@ def test_noise_weighted_gamma_is_closer_on_ten_levels_with_relative_noise():
     assert rms["noise"] < 0.75 * rms["luminance"], rms
 
 
+@pytest.mark.parametrize("weighting", ["luminance", "noise"])
+def test_power_law_fit_reaches_the_least_squares_minimum_scipy_finds_or_a_lower_one(weighting):
+    """The closed-form Newton fit against scipy's bounded least squares from the same start, on
+    sweeps with noise, a shoulder and a toe: never a higher sum of squares, and where the
+    minimum is well defined the same exponent."""
+    from scipy.optimize import least_squares
+
+    from workbench.display.tone_curves import noise_weights
+
+    rng = np.random.default_rng(11)
+    for trial in range(60):
+        drive = np.sort(rng.choice(np.arange(5, 256, 5), int(rng.integers(4, 52)),
+                                   replace=False)) / 255.0
+        gamma = rng.uniform(1.6, 3.2)
+        response = drive ** gamma * (1 + 0.004 * rng.standard_normal(drive.size))
+        if trial % 3 == 1:  # a shoulder: compression above 70 % drive
+            response = np.where(drive > 0.7, 0.7 ** gamma + 0.4 * (response - 0.7 ** gamma),
+                                response)
+        elif trial % 3 == 2:  # a toe: light at DAC 0
+            response = response + 0.01
+        weight = noise_weights(response) if weighting == "noise" else np.ones_like(response)
+        fitted, _ = fit_power_law(drive, response, weighting)
+        reference = least_squares(lambda g: (drive ** g[0] - response) * weight, x0=[2.2],
+                                  bounds=([0.1], [10.0])).x[0]
+
+        def cost(g):
+            return float(np.sum(((drive ** g - response) * weight) ** 2))
+
+        assert cost(fitted) <= cost(reference) * (1 + 1e-9), (trial, fitted, reference)
+        assert fitted == pytest.approx(reference, rel=1e-3), trial
+
+
+def test_power_law_fit_holds_to_its_bounds():
+    drive = np.linspace(0.1, 1, 10)
+    assert fit_power_law(drive, drive ** 14.0)[0] == pytest.approx(10.0)
+    assert fit_power_law(drive, np.ones_like(drive))[0] == pytest.approx(0.1)
+
+
 @pytest.mark.parametrize("model", [TRUE, SRGBDisplay(), SRGBDisplay(Y_white=250.0)])
 def test_round_trip_within_half_a_count_in_gamut(model, rng):
     dac = rng.uniform(0, 255, (20000, 3))
