@@ -175,9 +175,10 @@ class DriftCorrection:
           noise into the greys measured late, where the display sat within
           0.01 % of its settled state).
 
-        The references' SD is ``relative_sd`` (the noise model's) scaled to the settled
-        references' own scatter where that is larger (:func:`settled_scatter`); the curve's
-        covariance is read with it too.
+        The references' SD is ``relative_sd`` (the noise model's) scaled to the references' own
+        scatter where the display did not move between them (the settled run, and references read
+        seconds apart) and that is larger (:func:`settled_scatter`); the curve's covariance is
+        read with it too.
 
         Cp weighs what a curve removes of the references' scatter against what
         it copies of their noise, so ±σ jitter between neighbouring references
@@ -212,7 +213,8 @@ class DriftCorrection:
         n = self.gains.size
         if n < 3 or not np.all(sd > 0):
             return self
-        # the references' noise as the settled ones show it, where that is more than the model's
+        # the references' noise as they show it where the display held still, if more than the
+        # noise model's
         sd = sd * settled_scatter(self.times, self.gains, sd)
 
         def cp(curve, edf):
@@ -366,8 +368,9 @@ def settled_scatter(times: np.ndarray, gains: np.ndarray, sd: np.ndarray) -> flo
     reading's noise); the settled run begins after it, so its scatter did not count, the curve
     followed it and put the greys 0.5 % above the settled state (0.127 mean ΔE00 on hidden
     colours, the authors' 0.086). With the pair's difference beside the run's three (scale 1.8)
-    the curve passes under it: 0.056. Peer seed 47001 (a decline on the authors' plan, never settled, whites in pairs 16 s
-    apart that read up to 1.2 % apart at 0.5 % noise): 0.239 → 0.207 (the authors' 0.209).
+    the curve passes under it: 0.056. Peer seed 47001 (a decline on the authors' plan, never
+    settled, whites in pairs 16 s apart that read up to 1.2 % apart at 0.5 % noise): 0.239 →
+    0.207 (the authors' 0.209).
 
     On the peer bench's drift sessions (a warm-up beside the sweeps and a bluish black beside a
     step, seeds 30000–33000, 45000, 49000 and 53000–55000, and the four drift forms of the suite
