@@ -154,7 +154,7 @@ def test_package_manifest_is_a_unity_package_of_this_workbench_version():
     assert "MIT License" in (PACKAGE / "LICENSE.md").read_text()
     assert (PACKAGE / "README.md").is_file()
     project = tomllib.loads((Path(workbench.__file__).parents[1] / "pyproject.toml").read_text())
-    assert project["project"]["license"]["text"] == "MIT"
+    assert project["project"]["license"] == "MIT"  # an SPDX expression (PEP 639)
 
 
 def test_every_bundle_carries_the_whole_package_as_written(simulated_bundle):
