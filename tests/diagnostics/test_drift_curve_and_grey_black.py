@@ -141,9 +141,9 @@ def test_the_settled_references_scale_their_noise_where_they_scatter_more():
     wider = [settled_scatter(*_settled_after_a_step(seed, 1.6, 0.003)[::2], sd)
              for seed in range(60)]
     assert min(as_stated) == 1.0 and min(wider) == 1.0  # never below the noise model
-    # references as noisy as stated: mostly none (mean 1.03); 1.6 times that: read low (median
-    # 1.18), since the steadiness gate turns a run that scatters most away for a shorter one,
-    # but read
+    # references as noisy as stated: mostly no scale (mean 1.03); 1.6 times that: a scale read
+    # low (median 1.18), since the steadiness gate turns a run that scatters most away for a
+    # shorter one, but above 1
     assert np.median(as_stated) == 1.0 and np.mean(as_stated) < 1.08
     assert np.median(wider) > 1.12 and np.mean(wider) > 1.18
     # two settled references say nothing of their own scatter
