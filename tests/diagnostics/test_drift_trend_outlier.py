@@ -1,9 +1,14 @@
-"""The drift test's smooth trend must hold without a first white read a few σ low.
+"""The drift test's smooth trend must hold without a first white read a few σ low, and without a
+last white read off alone.
 
 A heavy-tailed instrument reads one white 2.5–4σ off now and then; at the session's start it
 has an endpoint's leverage on a low-degree trend, and it read as "a step up" on displays with
 no drift (the peer bench, one display's noise in four scenarios). A fast warm-up puts its
-first reference farther off than that, and the rest rise with it: it is still found.
+first reference farther off than that, and the rest rise with it: it is still found. At the
+session's end no warm-up speaks for a lone reading far off: the last white alone, up to
+:data:`OUTLIER_SIGMA` off, must not be the whole trend (one heavy-tailed reading 4–5σ high at the
+end made a display with no drift "a rise" on fresh peer-bench seeds); a change the last two
+references both show is still one.
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ import pytest
 
 from workbench.diagnostics.detectors import (
     DRIFT_TREND_DEGREE,
+    OUTLIER_SIGMA,
     TREND_OUTLIER_SIGMA,
     _trend_chi2,
     detect_temporal_drift_raw,
@@ -74,3 +80,27 @@ def test_a_rise_after_the_first_reference_alone_is_not_called_a_step_without_say
     assert _result(later).details["form"] == "a step up"
     # and a fall after the first reference is a step down
     assert _result(np.where(np.arange(TIMES.size) < 1, 1.05, 1.0)).details["form"] == "a step down"
+
+
+def test_a_last_white_read_far_off_alone_is_no_drift():
+    rng = np.random.default_rng(59007)
+    trend_alone_found = 0
+    for _ in range(10):
+        sigmas = rng.uniform(TREND_OUTLIER_SIGMA + 0.5, OUTLIER_SIGMA - 0.5)
+        relative = _steady(rng)
+        relative[-1] = np.median(relative) + rng.choice([-1, 1]) * sigmas * SD
+        result = _result(relative)
+        assert result.p_value > LEVEL, (sigmas, result.evidence)
+        trend_alone_found += chi2_sf(_trend_chi2(TIMES, relative, SD * relative,
+                                                 DRIFT_TREND_DEGREE), DRIFT_TREND_DEGREE) < LEVEL / 2
+    # with that reading the trend alone is beyond the level on most draws: leaving it out decides
+    assert trend_alone_found >= 5
+
+
+def test_a_change_the_last_two_whites_show_is_still_a_drift():
+    rng = np.random.default_rng(59008)
+    for _ in range(10):
+        relative = _steady(rng)
+        relative[-2:] += rng.choice([-1, 1]) * rng.uniform(8.0, 12.0) * SD
+        result = _result(relative)
+        assert result.p_value < LEVEL, result.evidence
