@@ -91,8 +91,8 @@ def test_a_last_white_read_far_off_alone_is_no_drift():
         relative[-1] = np.median(relative) + rng.choice([-1, 1]) * sigmas * SD
         result = _result(relative)
         assert result.p_value > LEVEL, (sigmas, result.evidence)
-        trend_alone_found += chi2_sf(_trend_chi2(TIMES, relative, SD * relative,
-                                                 DRIFT_TREND_DEGREE), DRIFT_TREND_DEGREE) < LEVEL / 2
+        trend = _trend_chi2(TIMES, relative, SD * relative, DRIFT_TREND_DEGREE)
+        trend_alone_found += chi2_sf(trend, DRIFT_TREND_DEGREE) < LEVEL / 2
     # with that reading the trend alone is beyond the level on most draws: leaving it out decides
     assert trend_alone_found >= 5
 
