@@ -6,7 +6,7 @@ has an endpoint's leverage on a low-degree trend, and it read as "a step up" on 
 no drift (the peer bench, one display's noise in four scenarios). A fast warm-up puts its
 first reference farther off than that, and the rest rise with it: it is still found. At the
 session's end no warm-up speaks for a lone reading far off: the last white alone, up to
-:data:`OUTLIER_SIGMA` off, must not be the whole trend (one heavy-tailed reading 4–5σ high at the
+:data:`OUTLIER_SIGMA` off, must not be the whole trend (one heavy-tailed reading 5σ high at the
 end made a display with no drift "a rise" on fresh peer-bench seeds); a change the last two
 references both show is still one.
 """
