@@ -39,8 +39,11 @@ paper's model holds for this effect":
     per channel, generalized least squares of the black-subtracted sweep's
     xy against ``(1 − d)`` and ``(1 − d)²`` (the full-drive point included,
     the subtracted black's own error a nuisance parameter): F-test of the
-    four slopes; the smallest p times 3 channels. Statistic: the fitted xy
-    distance at the lowest usable level.
+    four slopes, which with eight usable points or more must also hold
+    without the point farthest from the fit with no shift where that one
+    is within :data:`OUTLIER_SIGMA` (one reading is not a shift); the
+    smallest p times 3 channels. Statistic: the fitted xy distance at the
+    lowest usable level.
 ``tone-curve-shape``
     per channel, ``K + k·d^γ`` against ``K + k·f(d)`` with ``f`` GOG,
     extended power (one more parameter each) or the power law plus two sine
@@ -857,8 +860,12 @@ error by its shape: a black error moves xy as 1/(X + Y + Z), a leak or a desatur
 drive falls (every injected shift of the suite is named as before)."""
 
 
-def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
-    """(p, distance, its SE, lowest drive, coefficients (2, 2), z) of one channel, or None.
+def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext,
+                       leave_out: int | None = None):
+    """(p, distance, its SE, lowest drive, coefficients (2, 2), z, (most deviant point, its
+    distance in σ)) of one channel, or None; ``leave_out``: a point (index into the sweep) left
+    out. The most deviant point is the one farthest from the fit with no shift (its xy residual
+    in units of its own covariance, √ of a 2-dof χ²).
 
     Generalized least squares of the points' xy on ``1, u, u²`` (``u = 1 − d``)
     with each point's xy covariance, plus three nuisance parameters for the
@@ -867,6 +874,8 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
     points along a smooth curve, which must not pass for a shift.
     """
     usable = sweep.output >= MIN_CHROMATICITY_OUTPUT
+    if leave_out is not None:
+        usable[leave_out] = False
     if usable.sum() < 4:
         return None
     black_cov = mean_covariance(context.noise, context.black, context.black_count)
@@ -931,11 +940,38 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
         gradient[[1, 2]] = direction[0] * np.array([u0, u0 ** 2])
         gradient[[4, 5]] = direction[1] * np.array([u0, u0 ** 2])
     standard_error = float(np.sqrt(max(gradient @ parameter_cov @ gradient, 0.0)))
-    return p, distance, standard_error, 1.0 - u0, coefficients, z_of_chi2(4 * f_value, 4)
+    # each point's distance from the fit with no shift, in units of its own xy covariance
+    residual = xy - (np.vstack(blocks)[:, keep] @ null).reshape(points, 2)
+    distances = [float(np.sqrt(r @ np.linalg.solve(covariance[2 * i:2 * i + 2, 2 * i:2 * i + 2],
+                                                   r))) for i, r in enumerate(residual)]
+    deviant = int(np.argmax(distances))
+    return (p, distance, standard_error, 1.0 - u0, coefficients, z_of_chi2(4 * f_value, 4),
+            (int(np.flatnonzero(usable)[deviant]), distances[deviant]))
+
+
+MIN_ROBUST_CHROMATICITY_POINTS = 8
+"""Usable sweep points (:data:`~workbench.diagnostics.evidence.MIN_CHROMATICITY_OUTPUT`) from
+which a channel's chromaticity shift must also hold without its most deviant point."""
+
+
+def _robust_chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext):
+    """:func:`_chromaticity_test`, or the same without the channel's most deviant point where
+    that one is within :data:`OUTLIER_SIGMA` and the test so is
+    less significant: one reading is not a shift, as it is not a drift (farther off than that it
+    is no reading a heavy-tailed instrument gives)."""
+    test = _chromaticity_test(sweep, context)
+    if test is None:
+        return None
+    index, sigmas = test[6]
+    if (int(np.sum(sweep.output >= MIN_CHROMATICITY_OUTPUT)) < MIN_ROBUST_CHROMATICITY_POINTS
+            or sigmas >= OUTLIER_SIGMA):
+        return test
+    without = _chromaticity_test(sweep, context, leave_out=index)
+    return test if without is None or without[0] <= test[0] else without
 
 
 def detect_chromaticity_shift(context: DiagnosisContext) -> DetectorResult:
-    tests = [_chromaticity_test(s, context) for s in context.sweeps]
+    tests = [_robust_chromaticity_test(s, context) for s in context.sweeps]
     tested = [t for t in tests if t is not None]
     if not tested:
         return _untestable("chromaticity-shift", "no sweep has 4 levels above 2 % of its "
@@ -943,7 +979,7 @@ def detect_chromaticity_shift(context: DiagnosisContext) -> DetectorResult:
     p_values = [t[0] if t is not None else 1.0 for t in tests]
     worst = int(np.argmin(p_values))
     p = min(1.0, len(tested) * p_values[worst])
-    _, distance, standard_error, level, _, z = tests[worst]
+    _, distance, standard_error, level, _, z, _ = tests[worst]
     evidence = (f"the {CHANNEL_NAMES[worst]} primary's chromaticity (black subtracted) moves by "
                 f"Δxy {distance:.4f} ± {standard_error:.4f} between full drive and DAC "
                 f"{255 * level:.0f}; per channel "
