@@ -864,7 +864,7 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext,
                        leave_out: int | None = None):
     """(p, distance, its SE, lowest drive, coefficients (2, 2), z, (most deviant point, its
     distance in σ)) of one channel, or None; ``leave_out``: a point (index into the sweep) left
-    out. The most deviant point is the one farthest from the fit with no shift (its xy residual
+    out, and then no deviant point (None). The most deviant point is the one farthest from the fit with no shift (its xy residual
     in units of its own covariance, √ of a 2-dof χ²).
 
     Generalized least squares of the points' xy on ``1, u, u²`` (``u = 1 − d``)
@@ -940,13 +940,17 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext,
         gradient[[1, 2]] = direction[0] * np.array([u0, u0 ** 2])
         gradient[[4, 5]] = direction[1] * np.array([u0, u0 ** 2])
     standard_error = float(np.sqrt(max(gradient @ parameter_cov @ gradient, 0.0)))
+    z = z_of_chi2(4 * f_value, 4)
+    if leave_out is not None:  # the second test reads p alone
+        return p, distance, standard_error, 1.0 - u0, coefficients, z, None
     # each point's distance from the fit with no shift, in units of its own xy covariance
     residual = xy - (np.vstack(blocks)[:, keep] @ null).reshape(points, 2)
-    distances = [float(np.sqrt(r @ np.linalg.solve(covariance[2 * i:2 * i + 2, 2 * i:2 * i + 2],
-                                                   r))) for i, r in enumerate(residual)]
+    own = np.stack([covariance[2 * i:2 * i + 2, 2 * i:2 * i + 2] for i in range(points)])
+    distances = np.sqrt(np.einsum("ia,ia->i", residual,
+                                  np.linalg.solve(own, residual[:, :, None])[:, :, 0]))
     deviant = int(np.argmax(distances))
-    return (p, distance, standard_error, 1.0 - u0, coefficients, z_of_chi2(4 * f_value, 4),
-            (int(np.flatnonzero(usable)[deviant]), distances[deviant]))
+    return (p, distance, standard_error, 1.0 - u0, coefficients, z,
+            (int(np.flatnonzero(usable)[deviant]), float(distances[deviant])))
 
 
 MIN_ROBUST_CHROMATICITY_POINTS = 8
