@@ -864,8 +864,8 @@ def _chromaticity_test(sweep: ChannelSweep, context: DiagnosisContext,
                        leave_out: int | None = None):
     """(p, distance, its SE, lowest drive, coefficients (2, 2), z, (most deviant point, its
     distance in σ)) of one channel, or None; ``leave_out``: a point (index into the sweep) left
-    out, and then no deviant point (None). The most deviant point is the one farthest from the fit with no shift (its xy residual
-    in units of its own covariance, √ of a 2-dof χ²).
+    out, and then no deviant point (None). The most deviant point is the one farthest from the
+    fit with no shift (its xy residual in units of its own covariance, √ of a 2-dof χ²).
 
     Generalized least squares of the points' xy on ``1, u, u²`` (``u = 1 − d``)
     with each point's xy covariance, plus three nuisance parameters for the
