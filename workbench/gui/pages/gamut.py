@@ -40,6 +40,7 @@ from workbench.gamut import (
     to_diagram,
     validation_points,
 )
+from workbench.gui.refresh import RedrawWhenShown
 from workbench.gui.widgets.plot_view import place_legend
 
 __all__ = ["GamutPage"]
@@ -179,7 +180,8 @@ class GamutPage(QWidget):
                 self._overlays.append((path, gamut))
         except WorkbenchError as error:  # a broken shipped profile must not hide the page
             self.validation_label.setText(f"Shipped profiles not shown: {error}")
-        self._unsubscribe = [workspace.subscribe(event, lambda ws: self._on_workspace())
+        self._redraw_when_shown = RedrawWhenShown(self, self._on_workspace)
+        self._unsubscribe = [workspace.subscribe(event, lambda ws: self._redraw_when_shown())
                              for event in ("profile-changed", "session-changed",
                                            "diagnosis-changed")]
         self._on_workspace()
@@ -193,7 +195,8 @@ class GamutPage(QWidget):
         self.diagram_box.setCurrentIndex(self.diagram_box.findData(diagram))
 
     def coverage(self, reference: str):
-        """The :class:`workbench.gamut.Coverage` of ``reference`` shown now."""
+        """The :class:`workbench.gamut.Coverage` of ``reference`` for the workspace's profile."""
+        self._redraw_when_shown.flush()
         return self._coverage[reference]
 
     def add_profile_overlay(self, path) -> None:
@@ -211,6 +214,7 @@ class GamutPage(QWidget):
 
     def save_screenshot(self, path) -> None:
         """Write the page as PNG (``grab`` is faithful: no OpenGL)."""
+        self._redraw_when_shown.flush()
         if not self.grab().save(str(path)):
             raise OSError(f"could not write {path}")
 

@@ -33,6 +33,7 @@ from PySide6.QtWidgets import (
 
 from workbench.errors import WorkbenchError
 from workbench.gui.jobs import start_job
+from workbench.gui.refresh import RedrawWhenShown
 from workbench.gui.widgets_illuminants import (
     CLIPPED_MARK,
     SORT_ROLE,
@@ -166,9 +167,11 @@ class IlluminantsPage(QWidget):
         layout = QVBoxLayout(self)
         layout.addWidget(middle)
 
+        # a new profile's swatches are computed when the page is next shown
+        self._profile_changed = RedrawWhenShown(self, self._on_profile_changed)
         self._unsubscribe = [
             workspace.subscribe("sources-changed", lambda ws: self._on_sources_changed()),
-            workspace.subscribe("profile-changed", lambda ws: self._on_profile_changed()),
+            workspace.subscribe("profile-changed", lambda ws: self._profile_changed()),
         ]
         self._on_sources_changed()
         self._start_rows()
@@ -245,6 +248,7 @@ class IlluminantsPage(QWidget):
 
     def save_screenshot(self, path) -> None:
         """Write the page as PNG (``QWidget.grab`` shows it faithfully: no OpenGL here)."""
+        self._profile_changed.flush()
         if not self.grab().save(str(path)):
             raise OSError(f"could not write {path}")
 
