@@ -61,3 +61,18 @@ def test_the_gamut_page_hidden_during_a_load_shows_the_new_headset_when_opened(w
     np.testing.assert_allclose(np.column_stack(gamut._headset.getData())[:-1], expected.xy)
     assert not np.allclose(expected.xy, before[:-1])
 
+
+
+def test_the_illuminants_page_hidden_during_a_profile_change_computes_its_swatches_when_opened(window):
+    from profiles import example_profile_path
+    from workbench.profile import load_profile
+
+    page = window.page("illuminants")
+    window.show_page("illuminants")
+    assert set(page._comparisons) == set(window.workspace.selected_sources)
+    window.show_page("calibrate")
+    window.workspace.set_profile(load_profile(example_profile_path("simulated-headset")))
+    assert page._comparisons == {} and page._swatches_when_shown.owed  # put off while hidden
+    window.show_page("illuminants")
+    assert set(page._comparisons) == set(window.workspace.selected_sources)
+    assert not page._swatches_when_shown.owed

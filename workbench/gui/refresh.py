@@ -5,7 +5,7 @@ after the other, and every page that follows the workspace redrew at once, in
 the window's thread, whether it was on screen or not: at the end of a paper-plan
 run the Gamut page redrew three times and the Illuminants page recomputed its
 ColorChecker swatches, while the window showed the Fit & diagnose page
-(``bench gui``: the largest event-loop stall of the run, 116 ms, was there).
+(``bench gui``: the run's largest event-loop stall, 116–171 ms, was there).
 :class:`RedrawWhenShown` redraws a visible page at once and a hidden one once,
 when it is next shown, before it is painted.
 """

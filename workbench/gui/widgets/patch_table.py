@@ -49,7 +49,7 @@ class PatchTable(QWidget):
         self.table.verticalHeader().setVisible(False)
         # Columns are sized to their contents when a plan is set and widened when a cell needs it,
         # not by the header on every change: that scanned every row at each update (7.6 ms a
-        # patch on the paper plan's 250 rows, 31 ms on 1000, in the window's own thread).
+        # patch on 250 rows, 31 ms on 1000, in the window's own thread).
         header = self.table.horizontalHeader()
         header.setSectionResizeMode(QHeaderView.ResizeMode.Interactive)
         header.setStretchLastSection(True)
