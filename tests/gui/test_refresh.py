@@ -63,16 +63,22 @@ def test_the_gamut_page_hidden_during_a_load_shows_the_new_headset_when_opened(w
 
 
 
-def test_the_illuminants_page_hidden_during_a_profile_change_computes_its_swatches_when_opened(window):
+def test_the_illuminants_page_hidden_during_a_profile_change_computes_its_rows_and_swatches_when_opened(
+        window, qtbot):
     from profiles import example_profile_path
     from workbench.profile import load_profile
 
     page = window.page("illuminants")
     window.show_page("illuminants")
     assert set(page._comparisons) == set(window.workspace.selected_sources)
+    qtbot.waitUntil(lambda: not page.busy, timeout=60000)
+    before = page.model.row_of("cie-a").rgb8_profile
     window.show_page("calibrate")
     window.workspace.set_profile(load_profile(example_profile_path("simulated-headset")))
-    assert page._comparisons == {} and page._swatches_when_shown.owed  # put off while hidden
+    assert page._profile_when_shown.owed and not page.busy  # put off while hidden: no worker
     window.show_page("illuminants")
+    assert not page._profile_when_shown.owed
     assert set(page._comparisons) == set(window.workspace.selected_sources)
-    assert not page._swatches_when_shown.owed
+    with qtbot.waitSignal(page.rows_ready, timeout=60000):
+        pass
+    assert page.model.row_of("cie-a").rgb8_profile != before  # the light's RGB for the new headset
