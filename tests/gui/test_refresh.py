@@ -62,7 +62,6 @@ def test_the_gamut_page_hidden_during_a_load_shows_the_new_headset_when_opened(w
     assert not np.allclose(expected.xy, before[:-1])
 
 
-
 def test_the_illuminants_page_hidden_during_a_profile_change_computes_its_rows_and_swatches_when_opened(
         window, qtbot):
     from profiles import example_profile_path
