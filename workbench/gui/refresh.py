@@ -4,8 +4,9 @@ After a calibration the session, the diagnosis and the profile change one
 after the other, and every page that follows the workspace redrew at once, in
 the window's thread, whether it was on screen or not: at the end of a paper-plan
 run the Gamut page redrew three times and the Illuminants page recomputed its
-ColorChecker swatches and started its rows' worker, while the window showed the Fit & diagnose page
-(``bench gui``: the run's largest event-loop stall, 116–171 ms, was there).
+ColorChecker swatches and started its rows' worker, while the window showed the
+Fit & diagnose page (``bench gui``: the run's largest event-loop stall,
+116–171 ms, was there).
 :class:`RedrawWhenShown` redraws a visible page at once and a hidden one once,
 when it is next shown, before it is painted.
 """

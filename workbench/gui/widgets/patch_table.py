@@ -77,11 +77,7 @@ class PatchTable(QWidget):
         self.table.setRowCount(len(plan))
         self._status, self._reasons = {}, {}
         for index, patch in enumerate(plan.patches):
-            for column, text in enumerate((str(index), patch.kind, "{}, {}, {}".format(*patch.rgb), "pending", "", "")):
-                item = QTableWidgetItem(text)
-                if column == 0:
-                    item.setData(Qt.ItemDataRole.UserRole, index)
-                self.table.setItem(index, column, item)
+            self._put_row(index, patch)
         if journal is not None:
             for record in journal.records:
                 self.set_record(record)
@@ -94,12 +90,18 @@ class PatchTable(QWidget):
         if index < self.table.rowCount():
             return
         self.table.setRowCount(index + 1)
-        for column, text in enumerate((str(index), patch.kind, "{}, {}, {}".format(*patch.rgb), "pending", "", "")):
+        for column, text in enumerate(self._put_row(index, patch)):
+            self._widen(column, text)
+
+    def _put_row(self, index: int, patch) -> tuple:
+        """Fill row ``index`` with ``patch``, pending; returns the row's texts."""
+        texts = (str(index), patch.kind, "{}, {}, {}".format(*patch.rgb), "pending", "", "")
+        for column, text in enumerate(texts):
             item = QTableWidgetItem(text)
             if column == 0:
                 item.setData(Qt.ItemDataRole.UserRole, index)
             self.table.setItem(index, column, item)
-            self._widen(column, text)
+        return texts
 
     def set_measuring(self, index: int) -> None:
         self._set(index, 3, "measuring…")
