@@ -153,15 +153,16 @@ def _load_law(theta, channel, drive, mix_drive):
     ``(sweep points, white, mixtures)``, black subtracted (module doc)."""
     gamma, A = theta[:3], theta[3:6]
     a, k, q, offset = theta[6:]
-    weights = A / A.sum()
+    total = A.sum()
+    weights = A / total
     L = np.clip(drive, 0, 1) ** gamma[channel]
     load = weights[channel] * L
     x = np.clip((load - k) / (1 - k), 0, 1)
     sweep = A[channel] * L * (1 - a * x ** q) + offset
-    outputs = A * mix_drive ** gamma  # (M, 3) undimmed
-    x_mix = np.clip((outputs.sum(axis=1) / A.sum() - k) / (1 - k), 0, 1)
-    mixed = outputs.sum(axis=1) * (1 - a * x_mix ** q) + offset
-    return sweep, A.sum() * (1 - a) + offset, mixed
+    summed = (A * mix_drive ** gamma).sum(axis=1)  # the mixtures undimmed
+    x_mix = np.clip((summed / total - k) / (1 - k), 0, 1)
+    mixed = summed * (1 - a * x_mix ** q) + offset
+    return sweep, total * (1 - a) + offset, mixed
 
 
 def _gain_terms(load, a, k, q):
