@@ -270,8 +270,10 @@ def test_a_display_still_changing_at_the_end_keeps_the_last_two():
 
 
 def test_the_grey_ramp_model_reads_the_greys_against_the_black_it_adds_back():
-    generated = generate_session(PAIRED_FORMS["warm-up beside sweeps"], seed=30006,
-                                 plan="authors-2024")
+    # the display of peer session 30006 (a warm-up beside the sweeps, 0.16 % noise) held steady:
+    # the rows are read as measured, and with a warm-up in them the greys, measured last, stand
+    # above the mean of the whites that the ramp's top is
+    generated = generate_session({}, seed=30006, noise=0.0016, plan="authors-2024")
     session = generated.session
     black = np.all(session.rgb == 0, axis=1)
     # every black read well below zero in Z: noise about none, as a CS-2000 can read it

