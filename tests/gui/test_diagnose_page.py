@@ -9,13 +9,9 @@ than its column (a long evidence line or the follow-up button wraps instead of b
 
 import pytest
 
-pytest.importorskip("PySide6")
-pytest.importorskip("pyqtgraph")
-from workbench.gui import measure_window  # noqa: E402
+from tests.gui import require_window
 
-_UNAVAILABLE = measure_window.patch_window_unavailable_reason()
-if _UNAVAILABLE is not None:
-    pytest.skip(f"Qt cannot open a window here: {_UNAVAILABLE}", allow_module_level=True)
+require_window("pyqtgraph")
 
 from PySide6.QtWidgets import QApplication, QLabel  # noqa: E402
 

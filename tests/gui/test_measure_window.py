@@ -2,17 +2,15 @@
 
 import pytest
 
-pytest.importorskip("PySide6")
-from workbench.gui import measure_window  # noqa: E402
+from tests.gui import require_window
 
-_UNAVAILABLE = measure_window.patch_window_unavailable_reason()
-if _UNAVAILABLE is not None:
-    pytest.skip(f"Qt cannot open a window here: {_UNAVAILABLE}", allow_module_level=True)
+require_window()
 
 from PySide6.QtCore import Slot  # noqa: E402
 from PySide6.QtGui import QGuiApplication  # noqa: E402
 
 from workbench.cli import main  # noqa: E402
+from workbench.gui import measure_window  # noqa: E402
 from workbench.gui.patch_window import PatchWindow  # noqa: E402
 from workbench.measurement.journal import read_journal  # noqa: E402
 from workbench.measurement.plans import measurement_plan  # noqa: E402

@@ -5,12 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-pytest.importorskip("PySide6")
-from workbench.gui import measure_window  # noqa: E402
+from tests.gui import require_window
 
-_UNAVAILABLE = measure_window.patch_window_unavailable_reason()
-if _UNAVAILABLE is not None:
-    pytest.skip(f"Qt cannot open a window here: {_UNAVAILABLE}", allow_module_level=True)
+require_window()
 
 from workbench.gui.widgets.patch_table import PatchTable  # noqa: E402
 from workbench.measurement.journal import JournalRecord  # noqa: E402

@@ -5,15 +5,12 @@ import threading
 import pytest
 
 from instruments.patch_display import PatchDisplay, PatchDisplayError
+from tests.gui import require_window
 from workbench.errors import InputError
 
-pytest.importorskip("PySide6")
-from workbench.gui.measure_window import patch_window_unavailable_reason  # noqa: E402
-from workbench.gui.patch_window import PatchWindow, QtPatchDisplay, screen_names  # noqa: E402
+require_window()
 
-_UNAVAILABLE = patch_window_unavailable_reason()
-if _UNAVAILABLE is not None:  # without a display Qt would abort the whole test process
-    pytest.skip(f"Qt cannot open a window here: {_UNAVAILABLE}", allow_module_level=True)
+from workbench.gui.patch_window import PatchWindow, QtPatchDisplay, screen_names  # noqa: E402
 
 pytestmark = pytest.mark.gui
 
