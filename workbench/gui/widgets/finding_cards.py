@@ -282,12 +282,26 @@ class FindingCards(QScrollArea):
         return holder
 
     def show_diagnosis(self, diagnosis) -> None:
-        self.model_choice = self.model_reason = None
+        for _ in self.drawing_steps(diagnosis):
+            pass
+
+    def drawing_steps(self, diagnosis):
+        """:meth:`show_diagnosis` a part at a time: a generator that yields after the cards' contents
+        are read from ``diagnosis`` and after each card is built (a card's plot is tens of
+        milliseconds), and ends with them in place of the old ones, which stay shown until then."""
         if diagnosis is None:
+            self.model_choice = self.model_reason = None
             self.cards = []
             self._set_body(_wrapped("No diagnosis yet: calibrate, or open a session (File ▸ Open)."))
             return
-        self.cards = [FindingCard(card) for card in views.finding_cards(diagnosis)]
+        contents = views.finding_cards(diagnosis)
+        yield
+        cards = []
+        for content in contents:
+            cards.append(FindingCard(content))
+            yield
+        self.model_choice = self.model_reason = None
+        self.cards = cards
         self.action_button = None
         standalone = []
         rows = views.model_choice_rows(diagnosis)

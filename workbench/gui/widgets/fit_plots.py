@@ -36,27 +36,31 @@ class FitPlots(QWidget):
 
     def show_diagnosis(self, diagnosis) -> None:
         """Plot ``diagnosis`` (None: empty plots that say why)."""
-        self.show_sweeps(diagnosis)
-        self.show_others(diagnosis)
+        for _ in self.drawing_steps(diagnosis):
+            pass
 
-    def show_sweeps(self, diagnosis) -> None:
-        """The sweep fits and residuals."""
+    def drawing_steps(self, diagnosis):
+        """:meth:`show_diagnosis` a part at a time: a generator that yields after the sweeps'
+        views are computed and after each plot, so that a page can draw each part, and repaint
+        it, in an event-loop turn of its own (a plot's first paint after new data is 30–45 ms)."""
         if diagnosis is None:
             for plot in self.plots():
                 plot.show_view(None, "open a session or calibrate")
             return
-        for c, sweep in enumerate(views.sweep_views(diagnosis)):
+        sweeps = views.sweep_views(diagnosis)
+        yield
+        for c, sweep in enumerate(sweeps):
             self.fits[c].show_view(sweep.fit)
+            yield
             self.residuals[c].show_view(sweep.residuals)
-
-    def show_others(self, diagnosis) -> None:
-        """Additivity, greys, chromaticity and white references."""
-        if diagnosis is None:
-            return
+            yield
         self.additivity.show_view(views.additivity_view(diagnosis))
+        yield
         greys = views.grey_additivity_view(diagnosis)
         self.greys.setVisible(greys is not None)
         self.greys.show_view(greys, "no greys measured")
+        yield
         self.chromaticity.show_view(views.chromaticity_view(diagnosis))
+        yield
         self.whites.show_view(views.white_reference_view(diagnosis),
                               "white references need times\n(fewer than 3, or none in this file)")
