@@ -108,3 +108,28 @@ def test_a_real_session_with_a_grey_ramp_fits_a_1366_screen_and_marks_the_grey_r
     assert table.item(table.chosen_row(), 0).text() == "✓ grey-ramp+sweeps"
     assert table.rowCount() == 4  # baseline, extension, the authors' grey ramp, and it with the sweeps
     assert page.cards.widget().width() <= page.cards.viewport().width()
+
+
+def test_a_timer_fires_while_the_page_draws_a_diagnosis_part_by_part(qtbot, window, knee_csv):
+    """The page draws a diagnosis a part a turn on a timer of its own: a timer due meanwhile (a
+    click would be served the same way) runs before the last part is drawn. On a chain of zero
+    timers (posted events, all served before any timer) it ran only after the whole page."""
+    from PySide6.QtCore import QTimer
+
+    with qtbot.waitSignal(window.file_loaded, timeout=LOAD_TIMEOUT_MS):
+        window.open_path(knee_csv)
+    window.show_page("diagnose")
+    page = window.pages["diagnose"]
+    page.finish_drawing()
+    old_cards = page.cards.cards
+    drawing_when_fired = []
+    probe = QTimer()
+    probe.setInterval(0)
+    probe.timeout.connect(lambda: drawing_when_fired.append(page.cards.cards is old_cards))
+    page.show_diagnosis(window.workspace.diagnosis)  # drawn again, as after a new session
+    assert page.cards.cards is old_cards  # the first part drawn, the cards waiting for their turns
+    probe.start()
+    qtbot.waitUntil(lambda: page.cards.cards is not old_cards, timeout=LOAD_TIMEOUT_MS)
+    probe.stop()
+    assert any(drawing_when_fired), "no timer ran while the page was drawn"
+    assert len(page.cards.cards) == 2 and page.cards.model_choice is not None  # all of it drawn
