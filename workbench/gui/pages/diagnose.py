@@ -211,8 +211,8 @@ class DiagnosePage(QWidget):
         timer as a posted event, the event loop serves posted events (the repaints among them)
         until none is left before it serves a timer, and a chain of zero timers held the window
         as one stall: after a paper-plan run no 10 ms timer fired for 566 ms while six parts
-        were drawn. On a 1 ms timer, a part a plot, the longest wait after the run was 95–106 ms
-        in three runs (the page shown with its tables), none of a part longer than 101 ms.
+        were drawn. On a 1 ms timer, a part a plot, the longest wait after the run was 98–116 ms
+        in three runs, where the page is shown with its tables; every later part's under 100 ms.
         """
         self._step_timer.stop()  # a new diagnosis: its first part now, the rest on the timer
         if self._drawing is None:
