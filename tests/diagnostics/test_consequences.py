@@ -50,3 +50,21 @@ def test_no_power_limit_is_read_where_there_is_none(effects):
         assert not tone_bend_explained(diagnosis.context)[0], (effects, seed)
         assert not any(f.details.get("consequence_of") for f in diagnosis.findings)
         assert diagnosis.model_choice.chosen != "power-limit"
+
+
+@pytest.mark.parametrize("plan, form, seed", [("authors-2024", "power-limit-quadratic", 64002),
+                                              ("paper", "knee", 63007)])
+def test_a_power_limit_whose_white_is_short_channel_by_channel_is_still_the_cause(plan, form, seed):
+    """Each primary is dimmed at its own load, so a power limit's white against R+G+B need not be
+    one gain in X, Y and Z (the common-gain test calls it channel-specific here); one load gain
+    that explains the sweeps' bend and the white together still names the power limit as the
+    cause of the bend (peer sessions where the extension had been exported with a
+    `tone-curve-shape` beside the interaction: 0.336 → 0.030 and 0.340 → 0.034 ΔE00 on hidden
+    colours)."""
+    diagnosis = diagnose(generate_session({"channel-interaction": form}, seed=seed, plan=plan).session)
+    interaction = next(r for r in diagnosis.results if r.effect == "channel-interaction")
+    assert interaction.found and interaction.details["channel_specific"]
+    assert tone_bend_explained(diagnosis.context)[0]
+    tone = next(f for f in diagnosis.findings if f.effect == "tone-curve-shape")
+    assert tone.details.get("consequence_of") == "channel-interaction"
+    assert diagnosis.model_choice.chosen == "power-limit"

@@ -625,9 +625,12 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, str
     if "channel-interaction" not in found:
         return results, None
     interaction = next(r for r in results if r.effect == "channel-interaction")
-    if interaction.details.get("channel_specific"):  # the detector's common-gain test
-        return results, None
     explained, why, _ = tone_bend_explained(context)
+    if interaction.details.get("channel_specific") and not (explained and "tone-curve-shape" in found):
+        # the detector's common-gain test: the white short by one gain in X, Y and Z or not. A
+        # power limit dims each primary at its own load, so its white can fail that test; one
+        # load gain that explains the sweeps' bend and the white together still names it
+        return results, None
     if not explained:  # a knee above every channel's own load: only mixtures reach it
         return results, ("shown" if mixtures_show_load_gain(context)[0] else None)
     if "tone-curve-shape" not in found:
