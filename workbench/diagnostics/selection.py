@@ -607,7 +607,8 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, str
     """Mark a finding that another finding explains as its consequence (``consequence_of``).
 
     A power limit (``channel-interaction`` whose white falls short by one gain
-    on every channel) dims each sweep by its own load, which bends the
+    on every channel, or channel by channel where a bend was found: each
+    primary is dimmed at its own load) dims each sweep by its own load, which bends the
     bright channels' tone curves: where one load gain explains the sweeps
     and the white together and, divided out, leaves no sweep off a power law
     (:func:`~workbench.diagnostics.power_limit.tone_bend_explained`),
@@ -625,11 +626,14 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, str
     if "channel-interaction" not in found:
         return results, None
     interaction = next(r for r in results if r.effect == "channel-interaction")
+    # the detector's common-gain test: the white short by one gain in X, Y and Z or not. A power
+    # limit dims each primary at its own load, so its white can fail that test; one load gain that
+    # explains a bend found in the sweeps and the white together still names it
+    channel_specific = interaction.details.get("channel_specific")
+    if channel_specific and "tone-curve-shape" not in found:
+        return results, None
     explained, why, _ = tone_bend_explained(context)
-    if interaction.details.get("channel_specific") and not (explained and "tone-curve-shape" in found):
-        # the detector's common-gain test: the white short by one gain in X, Y and Z or not. A
-        # power limit dims each primary at its own load, so its white can fail that test; one
-        # load gain that explains the sweeps' bend and the white together still names it
+    if channel_specific and not explained:
         return results, None
     if not explained:  # a knee above every channel's own load: only mixtures reach it
         return results, ("shown" if mixtures_show_load_gain(context)[0] else None)
