@@ -64,6 +64,9 @@ def test_a_power_limit_whose_white_is_short_channel_by_channel_is_still_the_caus
     diagnosis = diagnose(generate_session({"channel-interaction": form}, seed=seed, plan=plan).session)
     interaction = next(r for r in diagnosis.results if r.effect == "channel-interaction")
     assert interaction.found and interaction.details["channel_specific"]
+    assert interaction.details["power_limit_explains"]  # its evidence read again with the sweeps
+    assert interaction.evidence.endswith("a power limit, which dims each primary at its own load, "
+                                         "not subpixel crosstalk")
     assert tone_bend_explained(diagnosis.context)[0]
     tone = next(f for f in diagnosis.findings if f.effect == "tone-curve-shape")
     assert tone.details.get("consequence_of") == "channel-interaction"

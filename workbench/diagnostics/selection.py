@@ -642,11 +642,20 @@ def _consequences(context: DiagnosisContext, results, found) -> tuple[tuple, str
         # levels): the power limit is offered to the model choice, not identified
         return results, "offered"
     note = f"the bend that channel-interaction's power limit puts on the sweeps: {why}"
-    return tuple(replace(r, evidence=f"{r.evidence}; a consequence of channel-interaction, "
-                                     f"{note}",
-                         details={**r.details, "consequence_of": "channel-interaction",
-                                  "consequence": note})
-                 if r.effect == "tone-curve-shape" else r for r in results), "identified"
+    reread = ("; read with the sweeps, one load gain explains this white and their bend together: "
+              "a power limit, which dims each primary at its own load, not subpixel crosstalk")
+
+    def marked(r):
+        if r.effect == "tone-curve-shape":
+            return replace(r, evidence=f"{r.evidence}; a consequence of channel-interaction, {note}",
+                           details={**r.details, "consequence_of": "channel-interaction",
+                                    "consequence": note})
+        if r.effect == "channel-interaction" and channel_specific:  # its evidence said crosstalk
+            return replace(r, evidence=r.evidence + reread,
+                           details={**r.details, "power_limit_explains": True})
+        return r
+
+    return tuple(marked(r) for r in results), "identified"
 
 
 def _materiality(context: DiagnosisContext, results, baseline, tone_forms=None
