@@ -347,19 +347,23 @@ def test_sparse_sweeps_are_five_to_twenty_five_levels_a_channel(levels, sparse):
     assert model_choice.has_sparse_sweep(SimpleNamespace(sweeps=sweeps)) is sparse
 
 
+@pytest.mark.parametrize("current", ["extension", "baseline"])
 @pytest.mark.parametrize("mixtures", [0, 40])
-def test_without_mixtures_the_greys_decide_a_tie_with_the_extension(given_errors, mixtures):
-    # the extension predicts the sweeps better, the sweep correction the greys: together within
-    # noise; with no mixtures among the fit rows the greys (several channels lit) decide
+def test_without_mixtures_the_greys_decide_a_tie(given_errors, mixtures, current, monkeypatch):
+    # the extension (or the paper's model) predicts the sweeps better, the sweep correction the
+    # greys: together within noise; with no mixtures among the fit rows the greys (several
+    # channels lit) decide. The paper's model too: a clean display on the authors' plan kept it
+    # on such a tie, 0.055 mean ΔE00 on hidden colours where the grey ramp scores 0.021
+    monkeypatch.setattr(model_choice, "has_sparse_sweep", lambda context: False)  # dense sweeps
     rng = np.random.default_rng(9)
     counts = (30, 20, 4, mixtures)
     extension = _errors(rng, 0.30, 0.50, 0.30, 0.40, counts)
     extension = (extension[0] + 0.08 * rng.standard_normal(extension[0].size), extension[1])
     given_errors["grey-ramp"] = _errors(rng, 0.45, 0.52, 0.30, 0.45, counts)
     given_errors["grey-ramp+sweeps"] = _errors(rng, 0.33, 0.46, 0.30, 0.40, counts)
-    choice = model_choice.choose_model(object(), "extension", extension, extension, drift=False)
+    choice = model_choice.choose_model(object(), current, extension, extension, drift=False)
     if mixtures:  # mixtures to tell: a tie keeps the extension
-        assert choice.chosen == "extension"
+        assert choice.chosen == current
     else:
         assert choice.chosen == "grey-ramp+sweeps"
         assert "the greys better" in choice.reason
