@@ -295,3 +295,24 @@ def test_the_grey_ramp_model_reads_the_greys_against_the_black_it_adds_back():
     theirs = np.mean(delta_E2000(fit_grey_ramp_linearisation(session).forward(rgb), truth,
                                  fit.white_XYZ))
     assert ours <= theirs + 0.01
+
+
+def test_a_last_reference_read_off_a_decline_is_not_followed_alone():
+    # a decline measured to the end, its last reference 3 σ above the trend (through the CS-2000
+    # protocol a decline's last white read 1.2 % above the one 16 s before it at 0.4 % noise): a
+    # kink at the last inner reference would leave no penalty on the last one, and the curve
+    # passed through that reading, where the rows measured last and the reference state are
+    times = np.array([48.0, 506, 610, 958, 1062, 1715, 1854, 1960, 2067, 2356, 2460, 2476])
+    truth = 1.025 - 0.03 * times / times[-1]
+    sd = 0.004
+    jumps = []
+    for seed in range(20):
+        noise = 0.5 * np.random.default_rng(seed).standard_normal(times.size)
+        gains = truth * (1.0 + sd * noise)
+        gains[-1] = truth[-1] * (1.0 + 3.0 * sd)
+        curve = DriftCorrection(times, gains, gains).smoothed_to_noise(np.full(times.size, sd))
+        smoothed = curve.gain(times)
+        # the curve's step between the last two references, against the readings'
+        jumps.append((smoothed[-1] - smoothed[-2]) / (curve.gains[-1] - curve.gains[-2]))
+    # (with the kink there: the whole step, 0.98 of it in the median over these seeds; now 0.09)
+    assert np.median(jumps) < 0.3 and np.mean(jumps) < 0.3, np.round(jumps, 2)
