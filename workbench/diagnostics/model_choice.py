@@ -714,7 +714,7 @@ def choose_model(context: DiagnosisContext, current: str, current_errors, baseli
                 and mixture_gain[0] > max(CV_Z * mixture_gain[1], MIXTURE_MATERIALITY_DE00)):
             tie_break = ("mixtures", f"the {mixtures[0][0].size} mixtures", mixture_gain, "")
         elif ((chosen == "extension" or chosen in PAPERS_MODELS)
-              and name in GREY_RAMP_CANDIDATES and mixtures[0] is None
+                and name in GREY_RAMP_CANDIDATES and mixtures[0] is None
                 and greys[0] > (CV_Z if physical else GREYS_TIE_Z) * greys[1]
                 and not others[0] < -CV_Z * others[1]):
             tie_break = ("greys", "the greys", greys, "; the fit rows hold no mixtures")
