@@ -2,9 +2,9 @@
 
 On the seed authors' plan (sweeps, a grey every 5 DAC, whites; no mixtures) the paper's model
 is fitted to the sweeps, which are three of the four kinds of fit row, while the greys are the
-only rows that light several channels as a validation colour does. A display of the independent
-generator with no effect in it whose tone curves are not quite power laws ties the two over all
-the rows; the greys decide (:data:`~workbench.diagnostics.model_choice.GREYS_TIE_Z`).
+only rows that light several channels as a validation colour does. On a display of the independent
+generator with no effect in it the two tie over all the rows; the greys decide
+(:data:`~workbench.diagnostics.model_choice.GREYS_TIE_Z`).
 """
 
 from __future__ import annotations
