@@ -428,12 +428,17 @@ def diagnose(session: Session) -> Diagnosis:
                            grey_ramp_corrected=_grey_ramp_correction(context, found, drift_z)
                            if drift_left_out else None)
     if choice.chosen == "extension" and constrained_by_whites(context, terms):
+        p_value = additivity_p_value(context)
         choice = replace(choice, primaries=(
-            f"estimated with the {context.white_count} white references as well: the white less "
-            f"the black is their sum within noise (additivity test p "
-            f"{additivity_p_value(context):.2f}), so each moves by its share of the white's "
-            "departure" + (", by a gain alone beside flexible tone curves"
-                           if "tone-curve-shape" in terms else "")))
+            f"estimated with the {context.white_count} white references as well: "
+            + (f"the white less the black is their sum within noise (additivity test p "
+               f"{p_value:.2f}), so each moves by its share of the white's departure"
+               if p_value >= FAMILY_ALPHA else
+               f"the model has no interaction term, so the white less the black is taken as their "
+               f"sum (additivity test p {p_value:.2g}: the departure is beyond noise) and each "
+               "moves by its share of it")
+            + (", by a gain alone beside flexible tone curves"
+               if "tone-curve-shape" in terms else "")))
     by_effect = dict(cross_validation["by_effect"])
     if choice.chosen in GREY_RAMP_CANDIDATES and drift_left_out:
         # the choice scored the candidate on corrected rows where its own cross-validation
