@@ -86,8 +86,8 @@ def test_an_interaction_term_moves_nothing():
 def test_a_white_off_the_sum_beyond_noise_moves_the_primaries_of_a_model_with_no_interaction_term():
     """A panel that dims its white (a power limit) fails the additivity test; a model without the
     interaction's term predicts the white as the primaries' sum all the same, and the step
-    shares the shortfall among them: the white then comes out as read."""
-    generated, context = _context({"channel-interaction": "power-limit"}, seed=3, noise=0.002)
+    shares the shortfall among them: the white then comes out near its reading."""
+    _, context = _context({"channel-interaction": "power-limit"}, seed=3, noise=0.002)
     assert additivity_p_value(context) < 1e-6
     assert constrained_by_whites(context, ())
     white = np.array([[255.0, 255.0, 255.0]])
