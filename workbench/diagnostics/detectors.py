@@ -137,8 +137,12 @@ __all__ = [
     "tone_data",
     "additivity_p_value",
     "mean_covariance",
-    "white_against_sum", "primaries_off_their_sweeps", "PRIMARY_OFF_SWEEP_Z",
-    "PRIMARY_SWEEP_TOP", "PRIMARY_SWEEP_LEVELS",
+    "white_against_sum",
+    "primaries_off_their_sweeps",
+    "PRIMARY_OFF_SWEEP_Z",
+    "PRIMARY_SWEEP_TOP",
+    "PRIMARY_SWEEP_LEVELS",
+    "PRIMARY_SWEEP_DEGREE",
     "primary_correction_covariance",
     "primary_drift_covariance",
     "curve_variance",
@@ -716,7 +720,7 @@ interaction that its own sweep and the greys deny."""
 
 PRIMARY_SWEEP_TOP = 0.8
 """The sweep levels from which a full-drive primary is extrapolated: drive at least this and
-below full drive (the paper's plan and the authors' hold nine, 5 DAC apart)."""
+below full drive (the paper's plan and the authors' hold ten, DAC 205–250)."""
 
 PRIMARY_SWEEP_LEVELS = 5
 """Fewest such levels for the extrapolation (a chart with a few levels a channel has none)."""
@@ -732,9 +736,9 @@ def primaries_off_their_sweeps(context: DiagnosisContext, summed: np.ndarray,
     """Primaries whose full-drive reading stands off their own sweep's top levels.
 
     Each channel's top levels (:data:`PRIMARY_SWEEP_TOP`, at least
-    :data:`PRIMARY_SWEEP_LEVELS` of them) are fitted log-log, X, Y and Z each a straight line
-    in ``log d`` weighted by the readings' noise (exact for a local power law), and extrapolated
-    to full drive; where the full-drive reading's luminance stands more than
+    :data:`PRIMARY_SWEEP_LEVELS` of them) are fitted log-log, the log of X, Y and Z each a
+    polynomial of degree :data:`PRIMARY_SWEEP_DEGREE` in ``log d`` weighted by the readings'
+    noise, and extrapolated to full drive; where the full-drive reading's luminance stands more than
     :data:`PRIMARY_OFF_SWEEP_Z` standard deviations (reading and extrapolation together) off it,
     the primary is listed as ``(channel, relative departure, z, Σ with it replaced by the
     extrapolation, the covariance with its reading's part replaced by the extrapolation's)``.
@@ -752,7 +756,8 @@ def primaries_off_their_sweeps(context: DiagnosisContext, summed: np.ndarray,
         weights = counts[top] / np.maximum(noise.relative_sd_Y(read_Y), 1e-12) ** 2
         design = np.column_stack([x ** k for k in range(PRIMARY_SWEEP_DEGREE + 1)])
         normal = design.T @ (weights[:, None] * design)
-        coefficients = np.linalg.solve(normal, design.T @ (weights[:, None] * np.log(sweep.XYZ[top])))
+        coefficients = np.linalg.solve(normal,
+                                       design.T @ (weights[:, None] * np.log(sweep.XYZ[top])))
         predicted = np.exp(coefficients[0])  # at log d = 0
         predicted_variance = float(np.linalg.inv(normal)[0, 0])  # relative, of log Y
         full_read = sweep.full_XYZ + context.black
