@@ -39,7 +39,7 @@ def test_a_primary_read_three_percent_low_is_listed_with_its_sweep_estimate():
     context = build_context(replace(session, XYZ=XYZ).without("validation"))
     listed = _listed(context)
     assert [entry[0] for entry in listed] == [2]
-    channel, departure, z, summed, _ = listed[0]
+    _, departure, z, summed, _ = listed[0]
     assert -0.035 < departure < -0.025 and z > PRIMARY_OFF_SWEEP_Z
     # the sum with the blue read from its sweep is within 1 % of the sum as it was measured
     truth = build_context(session.without("validation"))

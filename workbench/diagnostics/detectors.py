@@ -728,7 +728,7 @@ PRIMARY_SWEEP_LEVELS = 5
 PRIMARY_SWEEP_DEGREE = 2
 """Degree of the log-log polynomial extrapolated to full drive: a straight line is exact for a
 local power law but not for a shoulder, whose compression near full drive put all three
-primaries of a clean-additive display 1.6–3.3 % below it."""
+primaries of an additive display with a shoulder 1.6–3.3 % below it."""
 
 
 def primaries_off_their_sweeps(context: DiagnosisContext, summed: np.ndarray,
