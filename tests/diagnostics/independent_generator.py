@@ -83,7 +83,7 @@ import numpy as np
 from workbench.measurement.plans import measurement_plan
 from workbench.session import Session
 
-__all__ = ["FORMS", "SUITE_FORMS", "NEW_FORMS", "PAIRED_FORMS", "GeneratedSession",
+__all__ = ["FORMS", "SUITE_FORMS", "NEW_FORMS", "PAIRED_FORMS", "PROBES", "GeneratedSession",
            "generate_session", "hidden_colours", "nearest_power_law_distance"]
 
 SUITE_FORMS = {
@@ -114,6 +114,30 @@ plan, the authors' too), a bluish black beside a chromaticity shift toward the w
 bluish black beside a step drift."""
 
 
+PROBES = {
+    "wide-gamut": "primaries near ITU-R BT.2020's (a wide-gamut OLED or laser panel), gammas "
+                  "1.8–2.8, white 20–400 cd/m²",
+    "chromaticity-noise": "the noise a spectroradiometer's datasheet states instead of the "
+                          "generator's: chromaticity repeatability ±0.0002 in x and y (growing "
+                          "as 1/√Y below 1 % of white), luminance noise a, and the floor on X, "
+                          "Y and Z",
+    "correlated-noise": "the generator's noise plus a slow gain as large as its gain noise that "
+                        "carries over from reading to reading (AR(1), φ 0.9): a lamp or panel "
+                        "that flickers over a few patches",
+}
+"""Probe id → what it changes: a display or a noise none of the generator's forms draws, to see a
+diagnosis hold on what it was not tuned on (``generate_session(probe=…)``). Each draws from a
+stream of its own (:data:`PROBE_STREAM`), so a session without a probe is bit for bit as before,
+and a probe's session keeps the display, the effects and the noise draws of the same seed, less
+what the probe replaces."""
+
+PROBE_STREAM = 0x9B0BE
+"""Tag of a probe's stream: ``[session seed, PROBE_STREAM, part]``."""
+
+BT2020_PRIMARIES_XY = np.array([[0.708, 0.292], [0.170, 0.797], [0.131, 0.046]])
+"""ITU-R BT.2020's primaries (CIE 1931 xy), the ``wide-gamut`` probe's centre."""
+
+
 @dataclass(frozen=True)
 class GeneratedSession:
     session: Session
@@ -124,6 +148,7 @@ class GeneratedSession:
     display: "_Display | None" = None  # the display itself, effects on
     effect_free_display: "_Display | None" = None  # the same draws, no effect
     plan: str = "paper"
+    probe: str | None = None  # a key of PROBES, or None
 
     def true_at(self, rgb, t=None) -> np.ndarray:
         """Noiseless XYZ of DAC triplets ``rgb`` (N, 3) at time(s) ``t`` (s; the session's end
@@ -378,8 +403,50 @@ def _hide_new(display: _Display, effect: str, form: str, rng: np.random.Generato
     return float(_tone_distance(display))
 
 
+def _widen(display: "_Display", rng: np.random.Generator) -> None:
+    """The ``wide-gamut`` probe: primaries within ±0.01 of BT.2020's (blue within ±0.003 in x,
+    ±0.002 in y), white 20–400 cd/m², gammas 1.8–2.8; the white's chromaticity kept."""
+    spread = np.array([[0.01, 0.01], [0.01, 0.01], [0.003, 0.002]])
+    display.primaries_xy = BT2020_PRIMARIES_XY + rng.uniform(-1.0, 1.0, (3, 2)) * spread
+    display.white_Y = rng.uniform(20.0, 400.0)
+    units = np.column_stack([_unit(p) for p in display.primaries_xy])
+    display.shares = np.linalg.solve(units, _unit(display.white_xy))
+    display.columns = units * display.shares * display.white_Y
+    display.gammas = rng.uniform(1.8, 2.8, 3)
+
+
+def _chromaticity_noise(XYZ: np.ndarray, display: "_Display", a: float, floor: float,
+                        rng: np.random.Generator) -> np.ndarray:
+    """The ``chromaticity-noise`` probe: ``XYZ`` read with x and y each off by ±0.0002 (times
+    √(1 % of white / Y) below 1 % of white) and Y by ``a`` of itself, then the ``floor`` on each
+    of X, Y and Z (a dark signal is the sensor's, not the stimulus's: it does not scale with a
+    deep blue's Z/Y)."""
+    Y = XYZ[:, 1]
+    total = XYZ.sum(axis=1)
+    lit = total > 1e-9 * display.white_Y
+    xy = np.where(lit[:, None], XYZ[:, :2] / np.where(lit, total, 1.0)[:, None],
+                  display.white_xy[None, :])
+    dim = np.sqrt(0.01 * display.white_Y / np.maximum(Y, 1e-6 * display.white_Y))
+    xy = xy + 0.0002 * np.maximum(1.0, dim)[:, None] * rng.standard_normal((len(Y), 2))
+    Y = Y * (1.0 + a * rng.standard_normal(len(Y)))
+    x, y = xy[:, 0], xy[:, 1]
+    return (np.column_stack([x / y * Y, Y, (1.0 - x - y) / y * Y])
+            + floor * rng.standard_normal((len(Y), 3)))
+
+
+def _slow_gain(n: int, a: float, rng: np.random.Generator, carry: float = 0.9) -> np.ndarray:
+    """The ``correlated-noise`` probe's gain: an AR(1) series of standard deviation ``a``."""
+    step = rng.standard_normal(n)
+    series = np.empty(n)
+    series[0] = step[0]
+    for k in range(1, n):
+        series[k] = carry * series[k - 1] + np.sqrt(1.0 - carry ** 2) * step[k]
+    return a * series
+
+
 def generate_session(effects: dict | None = None, seed: int = 0,
-                     noise: float | None = None, plan: str = "paper") -> GeneratedSession:
+                     noise: float | None = None, plan: str = "paper",
+                     probe: str | None = None) -> GeneratedSession:
     """A plan (``paper`` unless told) measured on an independent display with ``effects`` hidden.
 
     Parameters
@@ -395,6 +462,8 @@ def generate_session(effects: dict | None = None, seed: int = 0,
         partial-drive mixtures to the fit rows; ``authors-2024`` is the seed
         authors' own plan, with a grey ramp). The display and its effects are
         drawn before the plan is read: one seed is one display on every plan.
+    probe : str, optional
+        A key of :data:`PROBES`: a display or a noise the generator's forms do not draw.
 
     The result also holds the noiseless truth (``true_XYZ``: the display with
     its effects, at each row's time) and ``effect_free_XYZ`` (the same display
@@ -404,8 +473,12 @@ def generate_session(effects: dict | None = None, seed: int = 0,
     plan_name = plan
     if isinstance(effects, str):
         effects = PAIRED_FORMS[effects]
+    if probe is not None and probe not in PROBES:
+        raise ValueError(f"no probe {probe!r}; use one of {sorted(PROBES)}")
     rng = np.random.default_rng([seed, 90411])
     display = _Display(rng)
+    if probe == "wide-gamut":
+        _widen(display, np.random.default_rng([seed, PROBE_STREAM, 0]))
     hidden = {}
     for effect, form in (effects or {}).items():
         if form not in FORMS[effect]:
@@ -422,6 +495,8 @@ def generate_session(effects: dict | None = None, seed: int = 0,
     display.session_s = float(t[-1])
     XYZ = display.XYZ(rgb, t)
     effect_free = _Display(np.random.default_rng([seed, 90411]))  # the same draws, no effect
+    if probe == "wide-gamut":
+        _widen(effect_free, np.random.default_rng([seed, PROBE_STREAM, 0]))
     effect_free_XYZ = effect_free.XYZ(rgb, t)
     gain = a * rng.standard_t(6, len(rgb)) / np.sqrt(6 / 4)
     per_coordinate = 0.3 * a * rng.standard_normal((len(rgb), 3))
@@ -429,14 +504,23 @@ def generate_session(effects: dict | None = None, seed: int = 0,
     shot = 0.1 * a * np.sqrt(np.abs(XYZ) * display.white_Y) * rng.standard_normal((len(rgb), 3))
     measured = (XYZ * (1 + gain[:, None] + per_coordinate) + shot
                 + floor * rng.standard_normal((len(rgb), 3)))
+    metadata = {"generator": "independent", "effects": {e: f for e, (f, _) in hidden.items()}}
+    if probe == "chromaticity-noise":
+        measured = _chromaticity_noise(XYZ, display, a, floor,
+                                       np.random.default_rng([seed, PROBE_STREAM, 1]))
+    elif probe == "correlated-noise":
+        measured = measured + XYZ * _slow_gain(len(rgb), a, np.random.default_rng(
+            [seed, PROBE_STREAM, 2]))[:, None]
+    if probe is not None:  # a follow-up cannot replay a probe's noise: the floor is kept
+        metadata.update(probe=probe, noise_floor=float(floor))
     session = Session(kind=kinds, rgb=rgb, XYZ=measured, t_s=t,
                       source=f"independent generator, seed {seed}, "
-                             + (", ".join(f"{e} ({f})" for e, (f, _) in hidden.items()) or "clean"),
-                      metadata={"generator": "independent", "effects": {e: f for e, (f, _) in
-                                                                       hidden.items()}})
+                             + (", ".join(f"{e} ({f})" for e, (f, _) in hidden.items()) or "clean")
+                             + (f", probe {probe}" if probe else ""),
+                      metadata=metadata)
     return GeneratedSession(session=session, effects=hidden, noise=a, true_XYZ=XYZ,
                             effect_free_XYZ=effect_free_XYZ, display=display,
-                            effect_free_display=effect_free, plan=plan_name)
+                            effect_free_display=effect_free, plan=plan_name, probe=probe)
 
 
 # -- a follow-up on the same display ---------------------------------------------------------------

@@ -27,7 +27,10 @@ The scenarios (:func:`scenarios`): a clean display, each form of
 :data:`~tests.diagnostics.independent_generator.PAIRED_FORMS`; ``--all-forms``
 adds every form of the suite. Session ``k`` of every scenario and plan has
 seed ``first_seed + k``: one display per seed on every plan, with only its
-effects changed between scenarios.
+effects changed between scenarios. ``--probe`` draws every session with a display or a noise
+the generator's forms do not
+(:data:`~tests.diagnostics.independent_generator.PROBES`: a wide-gamut panel, a
+spectroradiometer's chromaticity noise, a slow correlated gain).
 
 Run ``.venv/bin/python -m tests.diagnostics.peer_bench --seeds 3``.
 """
@@ -45,6 +48,7 @@ import numpy as np
 from tests.diagnostics.independent_generator import (
     NEW_FORMS,
     PAIRED_FORMS,
+    PROBES,
     SUITE_FORMS,
     generate_session,
     hidden_colours,
@@ -129,13 +133,13 @@ def hidden_score(generated, model, white, seed: int) -> float:
 
 
 def _session_outcome(plan: str, scenario: str, effects: dict, seed: int,
-                     strict: bool = False) -> PeerOutcome:
+                     strict: bool = False, probe: str | None = None) -> PeerOutcome:
     from workbench.diagnostics import diagnose
     from workbench.diagnostics.authors import fit_grey_ramp_linearisation
     from workbench.errors import InputError
 
     started = time.perf_counter()
-    generated = generate_session(effects, seed=seed, plan=plan)
+    generated = generate_session(effects, seed=seed, plan=plan, probe=probe)
     try:
         diagnosis = diagnose(generated.session)
     except Exception as error:  # a bench reports a failing session and goes on
@@ -169,7 +173,8 @@ def _session_outcome(plan: str, scenario: str, effects: dict, seed: int,
 
 
 def run_peer_bench(plans=PLANS, forms=None, seeds: int = 3, first_seed: int = FIRST_SEED,
-                   progress=None, strict: bool = False) -> list[PeerOutcome]:
+                   progress=None, strict: bool = False,
+                   probe: str | None = None) -> list[PeerOutcome]:
     """Every (plan, scenario, seed) session, diagnosed and scored on hidden colours.
 
     Parameters
@@ -185,7 +190,12 @@ def run_peer_bench(plans=PLANS, forms=None, seeds: int = 3, first_seed: int = FI
     strict : bool
         Raise where a diagnosis fails (else the session is kept with its ``error``, listed by
         :func:`table` and left out of every rate).
+    probe : str, optional
+        A key of :data:`~tests.diagnostics.independent_generator.PROBES`: every session drawn
+        with that display or noise instead of the generator's own.
     """
+    if probe is not None and probe not in PROBES:
+        raise ValueError(f"no probe {probe!r}; use one of {sorted(PROBES)}")
     if forms is None:
         chosen = scenarios()
     elif isinstance(forms, dict):
@@ -207,7 +217,7 @@ def run_peer_bench(plans=PLANS, forms=None, seeds: int = 3, first_seed: int = FI
             for name, effects in chosen.items() for k in range(seeds)]
     outcomes = []
     for number, (plan, name, effects, seed) in enumerate(jobs):
-        outcomes.append(_session_outcome(plan, name, effects, seed, strict))
+        outcomes.append(_session_outcome(plan, name, effects, seed, strict, probe))
         if progress is not None:
             progress(number + 1, len(jobs), outcomes[-1])
     return outcomes
@@ -314,6 +324,9 @@ def main(argv=None) -> int:
     parser.add_argument("--all-forms", action="store_true", help="every form of the suite too")
     parser.add_argument("--json", metavar="FILE", help="write every session's outcome here")
     parser.add_argument("--strict", action="store_true", help="stop at a failing diagnosis")
+    parser.add_argument("--probe", choices=sorted(PROBES),
+                        help="draw every session with this display or noise instead of the "
+                             "generator's own")
     args = parser.parse_args(argv)
     forms = args.forms
     if args.all_forms:
@@ -325,7 +338,8 @@ def main(argv=None) -> int:
 
     started = time.perf_counter()
     outcomes = run_peer_bench(plans=args.plans, forms=forms, seeds=args.seeds,
-                              first_seed=args.first_seed, progress=progress, strict=args.strict)
+                              first_seed=args.first_seed, progress=progress, strict=args.strict,
+                              probe=args.probe)
     print(file=sys.stderr)
     print(table(outcomes))
     print(f"{len(outcomes)} sessions in {time.perf_counter() - started:.0f} s")

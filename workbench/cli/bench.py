@@ -181,9 +181,22 @@ def _checked_seeds(args) -> int:
     return args.seeds
 
 
+PEER_PROBES = ("wide-gamut", "chromaticity-noise", "correlated-noise")
+"""The peer bench's probes (``tests.diagnostics.independent_generator.PROBES``), named here so
+that ``--help`` lists them without importing the tests."""
+
+
+def _peers_arguments(parser: argparse.ArgumentParser) -> None:
+    _seeds_arguments(parser)
+    parser.add_argument("--probe", choices=PEER_PROBES,
+                        help="draw every session with a display or noise the generator's forms do "
+                             "not: a wide-gamut panel, a spectroradiometer's chromaticity noise, "
+                             "or a slow correlated gain")
+
+
 def _peers_run(args: argparse.Namespace):
     bench = _from_tests("peer_bench")
-    outcomes = bench.run_peer_bench(seeds=_checked_seeds(args))
+    outcomes = bench.run_peer_bench(seeds=_checked_seeds(args), probe=getattr(args, "probe", None))
     return _BenchTable(bench.summarize(outcomes), bench.table(outcomes))
 
 
@@ -247,7 +260,7 @@ BENCHMARKS: dict[str, Benchmark] = {
     "peers": Benchmark("the exported profile beside the seed authors' grey-ramp method on the "
                        "independent generator's forms, on paper, paper+greys and authors-2024: "
                        "hidden-colour ΔE00, causes named, false findings",
-                       _seeds_arguments, _peers_run),
+                       _peers_arguments, _peers_run),
     "follow-up": Benchmark("the proposed follow-up measured on the same generated display: its "
                            "share of the instrument time and the held-out gain before and after",
                            _seeds_arguments, _follow_up_run),
