@@ -891,7 +891,10 @@ def beyond_noise_gain_variance(context: DiagnosisContext) -> float:
     scatter leaves above their noise in about half of all sessions) it weakened the test
     everywhere: seven knees of the generator's own 4134 peer sessions lost the bend they put
     on the sweeps, reported as the interaction's consequence; tested, two do, and nothing else
-    moved there, on the 940-session suite or on the 86 real displays.
+    moved there, on the 940-session suite or on the 86 real displays. Through the CS-2000
+    emulator (``bench plans``, 150 sessions) one paper-plan wander that the drift test did not
+    find lost the ``tone-curve-shape`` it had been given, and the extension's tone curves with
+    it, which had taken up part of the wander (0.140 → 0.166 mean ΔE00 on hidden colours).
     """
     drift = context.drift
     unexplained = unexplained_gain_variance(context)
