@@ -39,6 +39,13 @@ def test_a_session_without_a_probe_is_unchanged():
     assert "probe" not in plain.session.metadata
 
 
+def test_the_command_line_lists_the_generators_probes():
+    # `bench peers --help` names them without importing the tests
+    from workbench.cli.bench import PEER_PROBES
+
+    assert PEER_PROBES == tuple(PROBES)
+
+
 def test_an_unknown_probe_is_named_with_the_known_ones():
     with pytest.raises(ValueError, match="no probe 'oled'.*wide-gamut"):
         generate_session(seed=SEED, probe="oled")
