@@ -23,8 +23,9 @@ SEED = 84000
 
 
 def test_a_clean_display_under_a_slow_gain_gets_no_tone_finding():
-    # before: "the blue sweep is not a power law ... F-test p 0.0…" on a clean display whose
-    # twelve whites scatter at χ² 19.3 on 10 dof (p 0.04) and whose drift test finds no trend
+    # before: "the blue sweep is not a power law: an extended-power curve fits it better (F-test
+    # p 0.00087)" on a clean display whose eleven whites scatter at χ² 19.3 on 10 dof (p 0.04)
+    # and whose drift test finds no trend
     generated = generate_session(seed=SEED, plan="paper+greys", probe="correlated-noise")
     diagnosis = diagnose(generated.session)
     assert not diagnosis.findings, [(f.effect, f.evidence) for f in diagnosis.findings]
