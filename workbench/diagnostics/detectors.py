@@ -756,11 +756,10 @@ def primaries_off_their_sweeps(context: DiagnosisContext, summed: np.ndarray,
         read_Y = sweep.XYZ[top, 1] + context.black[1]
         weights = counts[top] / np.maximum(noise.relative_sd_Y(read_Y), 1e-12) ** 2
         design = np.column_stack([x ** k for k in range(PRIMARY_SWEEP_DEGREE + 1)])
-        normal = design.T @ (weights[:, None] * design)
-        coefficients = np.linalg.solve(normal,
-                                       design.T @ (weights[:, None] * np.log(sweep.XYZ[top])))
+        inverse = np.linalg.inv(design.T @ (weights[:, None] * design))
+        coefficients = inverse @ (design.T @ (weights[:, None] * np.log(sweep.XYZ[top])))
         predicted = np.exp(coefficients[0])  # at log d = 0
-        predicted_variance = float(np.linalg.inv(normal)[0, 0])  # relative, of log Y
+        predicted_variance = float(inverse[0, 0])  # relative, of log Y
         full_read = sweep.full_XYZ + context.black
         read_variance = float(noise.relative_sd_Y(full_read[1]) ** 2) / max(sweep.full_count, 1)
         departure = float(sweep.full_XYZ[1] / predicted[1] - 1.0)
@@ -900,7 +899,7 @@ def beyond_noise_gain_variance(context: DiagnosisContext) -> float:
     unexplained = unexplained_gain_variance(context)
     if unexplained <= 0:
         return 0.0
-    relative_sd = context.noise.sd_Y(drift.luminances) / drift.luminances
+    relative_sd = context.noise.relative_sd_Y(drift.luminances)
     chi2 = float(np.sum(((drift.gains - np.mean(drift.gains)) / relative_sd) ** 2))
     return unexplained if chi2_sf(chi2, drift.gains.size - 1) < FAMILY_ALPHA else 0.0
 
@@ -1268,12 +1267,15 @@ def _tone_test_points(drive, Y, sd, black_guess, full, noise_dof=np.inf):
     return best
 
 
-def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
+def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None,
+               slow_gain: float = 0.0):
     """(p, gap, gap SE, better form, z) of one channel, or None with too few levels.
 
     On the channel's own sweep (black rows at ``d = 0``) in absolute Y; where
     the sweep has fewer than :data:`MIN_TONE_LEVELS` levels below full drive,
     on the sweep and the grey-derived outputs together, in normalized output.
+    ``slow_gain``: a relative gain variance each level carries
+    (:func:`beyond_noise_gain_variance`).
     """
     inner = sweep.drive < 1.0
     if inner.sum() >= MIN_TONE_LEVELS:
@@ -1283,9 +1285,8 @@ def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
         drive = np.concatenate([np.zeros(context.black_count), sweep.drive])
         counts = np.concatenate([np.ones(context.black_count), sweep.counts])
         sd = context.noise.sd_Y(Y) / np.sqrt(counts)
-        unexplained = beyond_noise_gain_variance(context)
-        if unexplained > 0:  # the whites scatter beyond noise, no drift found: a gain on each level
-            sd = np.hypot(sd, np.sqrt(unexplained) * Y)
+        if slow_gain > 0:  # the whites scatter beyond noise, no drift found: a gain on each level
+            sd = np.hypot(sd, np.sqrt(slow_gain) * Y)
         if sweep.times is not None and context.drift is not None:
             # a drift correction's own error, alike on the levels measured one after another
             # between two references (DriftCorrection.bridge_covariance): one bend, not noise
@@ -1309,15 +1310,15 @@ def _tone_test(sweep: ChannelSweep, context: DiagnosisContext, greys=None):
     if sweep.correction_sd is not None:
         own = np.hypot(own, sweep.correction_sd * sweep.output)
     sd = np.concatenate([own, grey_sd[:, sweep.channel]])
-    unexplained = beyond_noise_gain_variance(context)
-    if unexplained > 0:
-        sd = np.hypot(sd, np.sqrt(unexplained) * L)
+    if slow_gain > 0:
+        sd = np.hypot(sd, np.sqrt(slow_gain) * L)
     return _tone_test_points(drive, L, sd, 0.0, 1.0, context.noise.dof)
 
 
 def detect_tone_curve_shape(context: DiagnosisContext) -> DetectorResult:
     greys = _grey_points(context)
-    tests = [_tone_test(s, context, greys) for s in context.sweeps]
+    slow_gain = beyond_noise_gain_variance(context)
+    tests = [_tone_test(s, context, greys, slow_gain) for s in context.sweeps]
     tested = [t for t in tests if t is not None]
     if not tested:
         return _untestable("tone-curve-shape", f"no sweep has {MIN_TONE_LEVELS} levels below "
