@@ -17,6 +17,18 @@ would identify what it could not, as the evidence asks:
   held-out colours must stay colours no model saw. A grey ramp the session
   already has (:data:`IDENTIFYING_GREYS` greys above 10 % drive) or mixtures
   it already has (:data:`IDENTIFYING_MIXTURES`) are not proposed again;
+* for that ``channel-interaction``, :data:`HIGH_LOAD_MIXTURES` bright mixtures
+  (kind ``mixture``) that load the panel beyond its brightest channel alone,
+  spread up to the white's load (:func:`_high_load_mixtures`), less those the
+  session has: a power limit whose knee lies above every channel's own load
+  leaves each sweep a power law and the cube above barely reaches it. Without
+  them, on the independent generator's ``power-limit`` form (paper plan, seeds
+  76000–76019) the follow-up left the power-limit model unidentified in 18 of
+  20 sessions and the extension's interaction term dimmed colours the panel
+  does not (hidden colours 0.085 → 0.135 mean ΔE00 on one, the paper's model
+  0.085); with them it is exported in 18 and the hidden-colour gain reaches
+  30 % in 18 (4 before). Bright patches are quick: on the demo's session the
+  eight took 25 s of instrument time, 1.3 % of the session's;
 * ``temporal-drift`` untestable for want of repeated whites, or found with
   fewer than :data:`FEW_REFERENCES` distinct references → the follow-up's
   white references come every :data:`DENSE_REFERENCE_INTERVAL` patches
@@ -101,6 +113,13 @@ IDENTIFYING_GREYS = 5
 
 IDENTIFYING_MIXTURES = 10
 """Partial-drive mixtures among the fit rows that cross-validate it (as ``unexplained-residual`` asks)."""
+
+HIGH_LOAD_LEVELS = (0, 128, 192, 224, 255)
+"""Per-channel DAC levels of the bright mixtures a high-load group is chosen from
+(:func:`_high_load_mixtures`)."""
+
+HIGH_LOAD_MIXTURES = 8
+"""Mixtures the follow-up proposes between the brightest channel's load and the white's."""
 
 FEW_REFERENCES = 6
 """A drift found on fewer distinct white references than this is thinly sampled."""
@@ -278,6 +297,54 @@ def _candidate_mixtures() -> list:
                 rgb[on[0]], rgb[on[1]] = u, v
                 pairs.append(tuple(rgb))
     return [Patch("mixture", rgb) for rgb in cube] + [Patch("mixture", rgb) for rgb in pairs]
+
+
+def _loads(context, rgb) -> tuple[np.ndarray, float]:
+    """``(load of each row of rgb, the brightest channel's load alone)``: the luminance-weighted
+    load of the panel, ``Σ_c w_c L_c(d_c)`` (``w_c`` the channel's share of the summed full-drive
+    luminance, ``L_c`` its sweep's output, interpolated), as
+    :mod:`~workbench.diagnostics.power_limit` defines it. Read from the sweeps alone, not from a
+    model of how the channels interact: that is what the rows are to identify."""
+    full = np.array([max(float(s.full_XYZ[1]), 0.0) for s in context.sweeps])
+    shares = full / full.sum() if full.sum() > 0 else np.full(3, 1 / 3)
+    drive = np.atleast_2d(np.asarray(rgb, dtype=float)) / 255.0
+    outputs = np.column_stack([np.interp(drive[:, c], np.concatenate([[0.0], s.drive]),
+                                         np.concatenate([[0.0], s.output]))
+                               for c, s in enumerate(context.sweeps)])
+    return outputs @ shares, float(shares.max())
+
+
+def _high_load_mixtures(context, present: set) -> tuple[list, float, int]:
+    """``(patches, brightest channel's load, rows already there)``: up to
+    :data:`HIGH_LOAD_MIXTURES` mixtures of :data:`HIGH_LOAD_LEVELS` (two or three channels lit, not
+    grey, not white) that load the panel beyond the brightest channel alone (:func:`_loads`),
+    spread evenly over that range of loads up to the white's, less what the session has.
+
+    A loss that sets in only past the brightest channel's own load (a power limit's knee above
+    it) leaves every sweep straight: only a mixture brighter than any one channel shows where it
+    starts, and the cube of the plans' mixture levels (at most DAC 192) hardly reaches there."""
+    raw = context.raw.rgb
+    lit = (raw > 0).sum(axis=1)
+    existing, top = _loads(context, raw)
+    mixtures = (lit >= 2) & ~np.all(raw >= 255, axis=1) & (existing > top)
+    already = len({tuple(rgb) for rgb in raw[mixtures].tolist()})
+    wanted = HIGH_LOAD_MIXTURES - already
+    candidates = [Patch("mixture", (r, g, b)) for r in HIGH_LOAD_LEVELS for g in HIGH_LOAD_LEVELS
+                  for b in HIGH_LOAD_LEVELS
+                  if sum(v > 0 for v in (r, g, b)) >= 2 and not r == g == b
+                  and (r, g, b) not in present]
+    if wanted <= 0 or not candidates:
+        return [], top, already
+    load = _loads(context, [p.rgb for p in candidates])[0]
+    inside = [int(i) for i in np.argsort(load, kind="stable") if top < load[i] < 0.99]
+    if len(inside) <= wanted:
+        return [candidates[i] for i in inside], top, already
+    # evenly over the range of loads: the candidate nearest each of ``wanted`` loads
+    picks: list = []
+    for target in np.linspace(load[inside[0]], load[inside[-1]], wanted):
+        picks.append(min((i for i in inside if i not in picks),
+                         key=lambda i: abs(load[i] - target)))
+    return [candidates[i] for i in sorted(picks, key=lambda i: -load[i])], top, already
 
 
 # -- luminance and time ------------------------------------------------------------------------------
@@ -518,6 +585,19 @@ def propose_follow_up(diagnosis) -> FollowUp:
                 groups.append(["mixtures", tuple(serves), mixture_why, mixtures, "mixtures"])
             else:
                 notes.append(f"the session already holds {n_mixtures} partial-drive mixtures: none proposed")
+            if "channel-interaction" in serves:
+                proposed = present | {p.rgb for g in groups for p in g[3]}
+                loaded, top, already = _high_load_mixtures(context, proposed)
+                if loaded:
+                    def loaded_why(kept, top=top, already=already):
+                        return (f"bright mixtures (DAC levels {', '.join(map(str, HIGH_LOAD_LEVELS[1:]))}) "
+                                f"that load the panel beyond its brightest channel alone "
+                                f"({100 * top:.0f} % of the channels' summed luminance) and up to the white "
+                                f"({already} such rows in the session): a loss that starts only past "
+                                "one channel's own load leaves every sweep straight, and only these "
+                                "show where it starts and how it grows")
+                    groups.append(["high-load mixtures", ("channel-interaction",), loaded_why,
+                                   loaded, "loaded"])
             if not any(g[3] for g in groups):
                 notes[:] = [("the session already holds the greys and mixtures that would identify "
                              f"{' and '.join(serves)}; repeat the session to tell an unstable display "
