@@ -47,7 +47,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from tests.diagnostics.independent_generator import generate_session, hidden_colours
+from tests.diagnostics.independent_generator import PROBES, generate_session, hidden_colours
 
 __all__ = ["FORMS", "CRITERION_FORMS", "PLAN", "HIDDEN_COLOURS", "TARGET_GAIN", "TARGET_RATE",
            "FIRST_SEED", "FollowUpOutcome", "session_outcome", "run_follow_up_bench", "summarize",
@@ -156,12 +156,13 @@ def _nan_outcome(form, seed, generated, error, started) -> FollowUpOutcome:
         seconds=time.perf_counter() - started, error=error)
 
 
-def session_outcome(form: str, seed: int, strict: bool = False, keep: dict | None = None
-                    ) -> FollowUpOutcome:
+def session_outcome(form: str, seed: int, strict: bool = False, keep: dict | None = None,
+                    probe: str | None = None) -> FollowUpOutcome:
     """Diagnose, propose, measure the follow-up on the same display, diagnose again, score.
 
     ``keep``: where given, the generated sessions, diagnoses and follow-up are stored in it
     (``generated``, ``diagnosis``, ``follow_up``, ``combined``, ``diagnosis_after``) for a test.
+    ``probe``: the generator's probe (``independent_generator.PROBES``) the session is drawn with.
     """
     from workbench.colorimetry import delta_E2000
     from workbench.diagnostics import diagnose
@@ -170,7 +171,8 @@ def session_outcome(form: str, seed: int, strict: bool = False, keep: dict | Non
     started = time.perf_counter()
     generated = None
     try:
-        generated = generate_session({"channel-interaction": form}, seed=seed, plan=PLAN)
+        generated = generate_session({"channel-interaction": form}, seed=seed, plan=PLAN,
+                                     probe=probe)
         before = diagnose(generated.session)
         follow_up = propose_follow_up(before)
         combined = generated.measure_more(follow_up.patches, seed=FOLLOW_UP_SEED) \
@@ -223,13 +225,14 @@ def session_outcome(form: str, seed: int, strict: bool = False, keep: dict | Non
 
 
 def run_follow_up_bench(forms=FORMS, seeds: int = 10, first_seed: int = FIRST_SEED,
-                        progress=None, strict: bool = False) -> list[FollowUpOutcome]:
+                        progress=None, strict: bool = False,
+                        probe: str | None = None) -> list[FollowUpOutcome]:
     """Every (form, seed) session: seeds ``first_seed`` … ``first_seed + seeds − 1`` per form
     (one display per seed, only the interaction's form changed between forms)."""
     jobs = [(form, first_seed + k) for form in forms for k in range(seeds)]
     outcomes = []
     for number, (form, seed) in enumerate(jobs):
-        outcomes.append(session_outcome(form, seed, strict))
+        outcomes.append(session_outcome(form, seed, strict, probe=probe))
         if progress is not None:
             progress(number + 1, len(jobs), outcomes[-1])
     return outcomes
@@ -369,6 +372,8 @@ def main(argv=None) -> int:
     parser.add_argument("--forms", nargs="+", default=list(FORMS))
     parser.add_argument("--json", metavar="FILE", help="write every session's outcome here")
     parser.add_argument("--strict", action="store_true", help="stop at a failing session")
+    parser.add_argument("--probe", choices=sorted(PROBES),
+                        help="draw every session with this probe of the generator")
     args = parser.parse_args(argv)
 
     def progress(done, total, outcome):
@@ -377,7 +382,7 @@ def main(argv=None) -> int:
 
     started = time.perf_counter()
     outcomes = run_follow_up_bench(forms=args.forms, seeds=args.seeds, first_seed=args.first_seed,
-                                   progress=progress, strict=args.strict)
+                                   progress=progress, strict=args.strict, probe=args.probe)
     print(file=sys.stderr)
     print(table(outcomes))
     print(f"{len(outcomes)} sessions in {time.perf_counter() - started:.0f} s")

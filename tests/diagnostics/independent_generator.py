@@ -124,6 +124,10 @@ PROBES = {
     "correlated-noise": "the generator's noise plus a slow gain as large as its gain noise that "
                         "carries over from reading to reading (AR(1), φ 0.9): a lamp or panel "
                         "that flickers over a few patches",
+    "current-load": "a power limit (power-limit, power-limit-quadratic, knee) that loads the "
+                    "panel by the current each channel draws, not by its light: an OLED's blue "
+                    "subpixels give 5–12 cd/A, green 50–100, red 20–40, so blue weighs several "
+                    "times its share of the white's luminance",
 }
 """Probe id → what it changes: a display or a noise none of the generator's forms draws, to see a
 diagnosis hold on what it was not tuned on (``generate_session(probe=…)``). Each draws from a
@@ -224,6 +228,7 @@ class _Display:
         shares = np.linalg.solve(units, _unit(self.white_xy))
         self.columns = units * shares * self.white_Y  # XYZ of each full primary
         self.shares = shares  # luminance share of each channel in white
+        self.load_weights = None  # what a power limit's load weighs each channel by (None: shares)
         self.gammas = rng.uniform(1.9, 2.6, 3)
         self.tone = None  # (form, parameter)
         self.black = np.zeros(3)
@@ -298,17 +303,18 @@ class _Display:
         if self.interaction is None:
             return np.ones(len(d))
         form, k, _ = self.interaction
+        weights = self.shares if self.load_weights is None else self.load_weights
         if form == "backlight":
             return 1 + k * (d.sum(axis=1) - d.max(axis=1)) / 2
         if form == "power-limit":
-            load = L @ self.shares
-            knee = self.shares.max() + 0.03
+            load = L @ weights
+            knee = weights.max() + 0.03
             return 1 - k * np.clip((load - knee) / (1 - knee), 0, 1)
         if form == "power-limit-quadratic":
-            return 1 - k * (L @ self.shares) ** 2
+            return 1 - k * (L @ weights) ** 2
         if form == "knee":
             knee = self.interaction[2]
-            return 1 - k * np.clip((L @ self.shares - knee) / (1 - knee), 0, 1)
+            return 1 - k * np.clip((L @ weights - knee) / (1 - knee), 0, 1)
         return np.ones(len(d))
 
     def _drift(self, t):
@@ -415,6 +421,15 @@ def _widen(display: "_Display", rng: np.random.Generator) -> None:
     display.gammas = rng.uniform(1.8, 2.8, 3)
 
 
+def _current_load(display: "_Display", rng: np.random.Generator) -> None:
+    """The ``current-load`` probe: a power limit's load weighs each channel by the current it
+    draws at full drive, its luminance share over its efficiency (cd/A: red 20–40, green 50–100,
+    blue 5–12, an OLED's spread), normalized to 1 at white."""
+    efficiency = rng.uniform([20.0, 50.0, 5.0], [40.0, 100.0, 12.0])
+    current = display.shares / efficiency
+    display.load_weights = current / current.sum()
+
+
 def _chromaticity_noise(XYZ: np.ndarray, display: "_Display", a: float, floor: float,
                         rng: np.random.Generator) -> np.ndarray:
     """The ``chromaticity-noise`` probe: ``XYZ`` read with x and y each off by ±0.0002 (times
@@ -479,6 +494,8 @@ def generate_session(effects: dict | None = None, seed: int = 0,
     display = _Display(rng)
     if probe == "wide-gamut":
         _widen(display, np.random.default_rng([seed, PROBE_STREAM, 0]))
+    elif probe == "current-load":
+        _current_load(display, np.random.default_rng([seed, PROBE_STREAM, 3]))
     hidden = {}
     for effect, form in (effects or {}).items():
         if form not in FORMS[effect]:

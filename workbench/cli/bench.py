@@ -181,7 +181,7 @@ def _checked_seeds(args) -> int:
     return args.seeds
 
 
-PEER_PROBES = ("wide-gamut", "chromaticity-noise", "correlated-noise")
+PEER_PROBES = ("wide-gamut", "chromaticity-noise", "correlated-noise", "current-load")
 """The peer bench's probes (``tests.diagnostics.independent_generator.PROBES``), named here so
 that ``--help`` lists them without importing the tests."""
 
@@ -191,7 +191,7 @@ def _peers_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--probe", choices=PEER_PROBES,
                         help="draw every session with a display or noise the generator's forms do "
                              "not: a wide-gamut panel, a spectroradiometer's chromaticity noise, "
-                             "or a slow correlated gain")
+                             "a slow correlated gain, or a power limit loaded by current")
 
 
 def _peers_run(args: argparse.Namespace):
@@ -202,7 +202,8 @@ def _peers_run(args: argparse.Namespace):
 
 def _follow_up_run(args: argparse.Namespace):
     bench = _from_tests("follow_up_bench")
-    outcomes = bench.run_follow_up_bench(seeds=_checked_seeds(args))
+    outcomes = bench.run_follow_up_bench(seeds=_checked_seeds(args),
+                                         probe=getattr(args, "probe", None))
     return _BenchTable(bench.summarize(outcomes), bench.table(outcomes))
 
 
@@ -263,7 +264,7 @@ BENCHMARKS: dict[str, Benchmark] = {
                        _peers_arguments, _peers_run),
     "follow-up": Benchmark("the proposed follow-up measured on the same generated display: its "
                            "share of the instrument time and the held-out gain before and after",
-                           _seeds_arguments, _follow_up_run),
+                           _peers_arguments, _follow_up_run),
     "plans": Benchmark("paper, paper+greys and adaptive measured through the CS-2000 emulator on the "
                        "independent generator's displays and the simulated headset: instrument time, "
                        "hidden-colour ΔE00, effects named", _plans_arguments, _plans_run),
