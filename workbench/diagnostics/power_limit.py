@@ -214,94 +214,53 @@ def _gain_terms(load, a, k, q):
 
 def _load_law_jacobian(theta, channel, drive, mix_drive) -> np.ndarray:
     """∂ :func:`_load_law` / ∂ ``theta`` in closed form: rows the sweep points, the white and
-    the mixtures, columns ``theta``'s ten parameters.
+    the mixtures, columns ``theta``'s ten parameters, or twelve with free load weights.
 
     With finite differences (eleven evaluations a step) :func:`fit_power_limit`'s ten starts were
     85 % of the diagnosis of a session with a channel interaction on the seed authors' plan
-    (4.4 s a session; 2.2 s so), and every bench's findings and scores are the same."""
-    if theta.size == 12:
-        return _free_weights_jacobian(theta, channel, drive, mix_drive)
+    (4.4 s a session; 2.2 s so), and every bench's findings and scores are the same.
+
+    The load is ``Σ_j w_j L_j`` either way. Weighed by light, ``w = A / ΣA`` moves with the
+    primaries' luminances (``∂w_j/∂A_i = (δ_ij − w_j) / ΣA``); free, ``w`` is the softmax of the
+    last two parameters (``∂w_j/∂r_i = w_j (δ_ij − w_i)``) and the primaries leave it alone."""
     gamma, A = theta[:3], theta[3:6]
     a, k, q = theta[6:9]
+    free = theta.size == 12
     total = A.sum()
+    weights = _softmax_weights(theta[10:12]) if free else A / total
+    # ∂w/∂(the load's own parameters): (parameters, channels), the columns they fill
+    if free:
+        dweights = np.array([[weights[j] * ((j == i) - weights[i]) for j in range(3)]
+                             for i in (0, 2)])
+        columns = slice(10, 12)
+    else:
+        dweights = (np.eye(3) - weights[None, :]) / total
+        columns = slice(3, 6)
     n, m = drive.size, mix_drive.shape[0]
     out = np.zeros((n + 1 + m, theta.size))
     rows = np.arange(n)
-    # the sweeps: A_c L (1 − a x^q) + δ, L = d^γ_c, load = A_c L / ΣA
+    # the sweeps: A_c L (1 − a x^q) + δ, L = d^γ_c, load = w_c L
     d = np.clip(drive, 0, 1)
     L = d ** gamma[channel]
     A_c = A[channel]
-    load = A_c * L / total
+    load = weights[channel] * L
     xq, gain, slope, log_x = _gain_terms(load, a, k, q)
     dL = L * np.log(np.where(d > 0, d, 1.0))  # ∂L/∂γ_c (0 at d = 0)
-    out[rows, channel] = A_c * dL * gain + A_c * L * slope * A_c * dL / total
+    out[rows, channel] = A_c * dL * gain + A_c * L * slope * weights[channel] * dL
     for j in range(3):
-        dload = L * ((channel == j) * total - A_c) / total ** 2
-        out[rows, 3 + j] = (channel == j) * L * gain + A_c * L * slope * dload
+        out[rows, 3 + j] = (channel == j) * L * gain
+    out[rows, columns] += (A_c * L * slope * L)[:, None] * dweights[:, channel].T
     out[rows, 6] = -A_c * L * xq
     out[rows, 7] = A_c * L * slope * (load - 1) / (1 - k)
     out[rows, 8] = -A_c * L * a * xq * log_x
     out[:n, 9] = 1.0
-    # the white: ΣA (1 − a) + δ
+    # the white: ΣA (1 − a) + δ (its load is 1 whatever the weights)
     out[n, 3:6] = 1 - a
     out[n, 6] = -total
     out[n, 9] = 1.0
     if m:
         dm = np.clip(mix_drive, 0, 1)
         powered = dm ** gamma  # (M, 3)
-        outputs = A * powered
-        summed = outputs.sum(axis=1)
-        load = summed / total
-        xq, gain, slope, log_x = _gain_terms(load, a, k, q)
-        d_outputs = outputs * np.log(np.where(dm > 0, dm, 1.0))  # ∂(A_j d_j^γ_j)/∂γ_j
-        mix = slice(n + 1, None)
-        out[mix, 0:3] = (d_outputs * gain[:, None]
-                         + (summed * slope)[:, None] * d_outputs / total)
-        dload = powered / total - (summed / total ** 2)[:, None]
-        out[mix, 3:6] = powered * gain[:, None] + (summed * slope)[:, None] * dload
-        out[mix, 6] = -summed * xq
-        out[mix, 7] = summed * slope * (load - 1) / (1 - k)
-        out[mix, 8] = -summed * a * xq * log_x
-        out[mix, 9] = 1.0
-    return out
-
-
-def _free_weights_jacobian(theta, channel, drive, mix_drive) -> np.ndarray:
-    """:func:`_load_law_jacobian` with free load weights (``theta``'s twelve parameters, the last
-    two the log-ratios of red's and blue's weights to green's): the load no longer reads the
-    primaries' luminances, ``∂w_j/∂r_i = w_j (δ_ij − w_i)``."""
-    gamma, A = theta[:3], theta[3:6]
-    a, k, q = theta[6:9]
-    weights = _softmax_weights(theta[10:12])
-    ratio_of = (0, 2)  # r_R, r_B
-    dweights = np.array([[weights[j] * ((j == i) - weights[i]) for j in range(3)]
-                         for i in ratio_of])  # (2, 3)
-    total = A.sum()
-    n, m = drive.size, mix_drive.shape[0]
-    out = np.zeros((n + 1 + m, theta.size))
-    rows = np.arange(n)
-    d = np.clip(drive, 0, 1)
-    L = d ** gamma[channel]
-    A_c = A[channel]
-    w_c = weights[channel]
-    load = w_c * L
-    xq, gain, slope, log_x = _gain_terms(load, a, k, q)
-    dL = L * np.log(np.where(d > 0, d, 1.0))
-    out[rows, channel] = A_c * dL * gain + A_c * L * slope * w_c * dL
-    for j in range(3):
-        out[rows, 3 + j] = (channel == j) * L * gain
-    out[rows, 6] = -A_c * L * xq
-    out[rows, 7] = A_c * L * slope * (load - 1) / (1 - k)
-    out[rows, 8] = -A_c * L * a * xq * log_x
-    out[:n, 9] = 1.0
-    for i in range(2):
-        out[rows, 10 + i] = A_c * L * slope * L * dweights[i, channel]
-    out[n, 3:6] = 1 - a
-    out[n, 6] = -total
-    out[n, 9] = 1.0
-    if m:
-        dm = np.clip(mix_drive, 0, 1)
-        powered = dm ** gamma
         outputs = A * powered
         summed = outputs.sum(axis=1)
         load = powered @ weights
@@ -311,11 +270,11 @@ def _free_weights_jacobian(theta, channel, drive, mix_drive) -> np.ndarray:
         out[mix, 0:3] = (outputs * log_d * gain[:, None]
                          + (summed * slope)[:, None] * weights * powered * log_d)
         out[mix, 3:6] = powered * gain[:, None]
+        out[mix, columns] += (summed * slope)[:, None] * (powered @ dweights.T)
         out[mix, 6] = -summed * xq
         out[mix, 7] = summed * slope * (load - 1) / (1 - k)
         out[mix, 8] = -summed * a * xq * log_x
         out[mix, 9] = 1.0
-        out[mix, 10:12] = (summed * slope)[:, None] * (powered @ dweights.T)
     return out
 
 
