@@ -381,7 +381,7 @@ FREE_WEIGHT_STARTS = ((0.0, 0.0),)
 own: equal weights. With two more (blue, and red and blue, weighing more than green) a power
 limit's diagnosis took 1.0–1.4 s where it takes 0.7–1.1 (0.5–0.9 with the luminance law alone),
 and on the ``current-load`` probe's 45 power limits of the peer bench two sessions moved, one
-each way (0.104 ↔ 0.060 mean ΔE00 on hidden colours)."""
+each way (with two starts 0.104 → 0.060 and 0.054 → 0.104 mean ΔE00 on hidden colours)."""
 
 
 def _free_weights_fit(luminance, residual, jacobian, rows: int):
@@ -413,7 +413,9 @@ def _free_weights_fit(luminance, residual, jacobian, rows: int):
     dof = rows - best.x.size
     if dof <= 0 or _softmax_weights(best.x[10:12]).min() < MIN_LOAD_WEIGHT:
         return None
-    f_value = (luminance.cost - best.cost) * 2 / 2 / max(2 * best.cost / dof, 1.0)
+    # the χ² the two weights remove (twice the cost's drop) over their 2 dof, against the
+    # residual variance, never below the noise model's
+    f_value = (luminance.cost - best.cost) / max(2 * best.cost / dof, 1.0)
     return best if f_sf(max(f_value, 0.0), 2, dof) <= FREE_WEIGHTS_P else None
 
 
