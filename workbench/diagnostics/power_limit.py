@@ -278,6 +278,19 @@ def _load_law_jacobian(theta, channel, drive, mix_drive) -> np.ndarray:
     return out
 
 
+def _best_of_starts(residual, jacobian, starts, bounds):
+    """The bounded least squares of least cost over ``starts``, or None where none could start."""
+    best = None
+    for start in starts:
+        try:
+            fit = least_squares(residual, start, jac=jacobian, bounds=bounds)
+        except ValueError:
+            continue
+        if best is None or fit.cost < best.cost:
+            best = fit
+    return best
+
+
 def fit_power_limit(context: DiagnosisContext, min_levels: int = MIN_SWEEP_LEVELS,
                     mixtures: bool = False) -> PowerLimitFit | None:
     """The joint power-law + load-gain fit (module doc), or None without the rows it needs
@@ -314,18 +327,11 @@ def fit_power_limit(context: DiagnosisContext, min_levels: int = MIN_SWEEP_LEVEL
     def jacobian(theta):
         return _load_law_jacobian(theta, channel, drive, mix_drive) * scale[:, None]
 
-    best = None
-    for knee in (0.0, 0.2, 0.4, 0.55, 0.7):
-        for shape in (1.0, 2.0):
-            start = [2.2, 2.2, 2.2, *full, 0.05, knee, shape, 0.0]
-            try:
-                fit = least_squares(residual, start, jac=jacobian,
-                                    bounds=([0.3] * 3 + [0.0] * 3 + [-0.5, 0.0, 0.5, -np.inf],
-                                            [8.0] * 3 + [np.inf] * 3 + [0.95, 0.9, 4.0, np.inf]))
-            except ValueError:
-                continue
-            if best is None or fit.cost < best.cost:
-                best = fit
+    starts = [[2.2, 2.2, 2.2, *full, 0.05, knee, shape, 0.0]
+              for knee in (0.0, 0.2, 0.4, 0.55, 0.7) for shape in (1.0, 2.0)]
+    best = _best_of_starts(residual, jacobian, starts,
+                           ([0.3] * 3 + [0.0] * 3 + [-0.5, 0.0, 0.5, -np.inf],
+                            [8.0] * 3 + [np.inf] * 3 + [0.95, 0.9, 4.0, np.inf]))
     if best is None:
         return None
     free = _free_weights_fit(best, residual, jacobian, Y.size + 1 + mix_Y.size)
@@ -398,16 +404,9 @@ def _free_weights_fit(luminance, residual, jacobian, rows: int):
     shares = np.log(np.maximum(A, 1e-12) / max(A[1], 1e-12))[[0, 2]]
     lower = [0.3] * 3 + [0.0] * 3 + [-0.5, 0.0, 0.5, -np.inf, -6.0, -6.0]
     upper = [8.0] * 3 + [np.inf] * 3 + [0.95, 0.9, 4.0, np.inf, 6.0, 6.0]
-    best = None
-    for ratios in (tuple(shares), *FREE_WEIGHT_STARTS):
-        start = np.concatenate([luminance.x, ratios])
-        start = np.clip(start, np.array(lower) + 1e-9, np.array(upper) - 1e-9)
-        try:
-            fit = least_squares(residual, start, jac=jacobian, bounds=(lower, upper))
-        except ValueError:
-            continue
-        if best is None or fit.cost < best.cost:
-            best = fit
+    starts = [np.clip(np.concatenate([luminance.x, ratios]), np.array(lower) + 1e-9,
+                      np.array(upper) - 1e-9) for ratios in (tuple(shares), *FREE_WEIGHT_STARTS)]
+    best = _best_of_starts(residual, jacobian, starts, (lower, upper))
     if best is None:
         return None
     dof = rows - best.x.size
